@@ -1,0 +1,44 @@
+"""Exceptions raised by hertz_chain.
+
+Every user-facing error is a subclass of :class:`HertzChainError`, so the command line can catch one
+type and print a single line. Messages name the parameter, the offending value and what is allowed.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "HertzChainError",
+    "ParameterError",
+    "StackFileError",
+    "SolverError",
+    "check_parameter",
+]
+
+
+class HertzChainError(Exception):
+    """Base class of every error that hertz_chain raises on purpose."""
+
+
+class ParameterError(HertzChainError, ValueError):
+    """A parameter is out of its allowed range or of the wrong kind."""
+
+    def __init__(self, name: str, value: object, allowed: str):
+        self.name, self.value, self.allowed = name, value, allowed
+        super().__init__(f"{name} = {value!r} is invalid: {allowed}")
+
+
+class StackFileError(HertzChainError, ValueError):
+    """A stack file (TOML) is malformed, has unknown keys, missing fields or wrong units."""
+
+
+class SolverError(HertzChainError, RuntimeError):
+    """The ODE solver failed (max steps, non-finite state, ...). The message carries a hint."""
+
+
+def check_parameter(ok: bool, name: str, value: object, allowed: str) -> None:
+    """Raise :class:`ParameterError` unless ``ok``.
+
+    ``ok`` must be a concrete Python/NumPy boolean (validation happens outside JAX tracing).
+    """
+    if not bool(ok):
+        raise ParameterError(name, value, allowed)
