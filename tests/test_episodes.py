@@ -1,0 +1,77 @@
+"""Contact episodes and effective restitution, on analytic overlap histories.
+
+Reference: the unclamped linear spring-dashpot impact has the closed-form overlap
+delta(t) = (v0/wd) exp(-zeta w t) sin(wd t) for 0 <= t <= pi/wd, with restitution
+e = exp(-zeta pi / sqrt(1 - zeta^2)) and peak overlap at tan(wd t) = wd/(zeta w)
+(e.g. Schwager & Pöschel 2007). Before and after, the bodies move freely (delta linear in t).
+"""
+
+import numpy as np
+import pytest
+
+from hertz_chain.episodes import contact_episodes, overlap_rates
+
+
+def _kv_history(t, t0, v0, w, zeta):
+    wd = w * np.sqrt(1 - zeta**2)
+    tc = np.pi / wd
+    s = t - t0
+    inside = (s >= 0) & (s <= tc)
+    d = np.where(inside, v0 / wd * np.exp(-zeta * w * s) * np.sin(wd * s), 0.0)
+    dd = np.where(inside, v0 * np.exp(-zeta * w * s) * (np.cos(wd * s) - zeta * w / wd * np.sin(wd * s)), 0.0)
+    v_end = v0 * np.exp(-zeta * w * tc) * (-1.0)  # delta_dot at the end of contact
+    before, after = s < 0, s > tc
+    d = np.where(before, v0 * s, d)
+    dd = np.where(before, v0, dd)
+    d = np.where(after, v_end * (s - tc), d)
+    dd = np.where(after, v_end, dd)
+    return d, dd, tc
+
+
+@pytest.mark.parametrize("zeta", [0.05, 0.2, 0.5])
+def test_restitution_and_times_of_a_kelvin_voigt_impact(zeta):
+    rng = np.random.default_rng(0)
+    w, v0, t0 = 2 * np.pi * 1e3, 1.3, 1.234e-3
+    # non-uniform samples, about 400 per contact, as an adaptive solver would give
+    t = np.sort(np.concatenate([[0.0, 4e-3], rng.uniform(0, 4e-3, 1600)]))
+    d, dd, tc = _kv_history(t, t0, v0, w, zeta)
+    force = 1e6 * np.maximum(d, 0)
+    # free flight: delta_ddot = 0 outside the contact (two masses, no gravity difference)
+    acc = np.zeros_like(d)
+    eps = contact_episodes(t, d[:, None], dd[:, None], force[:, None], accelerations=acc[:, None])
+    assert len(eps) == 1
+    ep = eps[0]
+    e_exact = np.exp(-zeta * np.pi / np.sqrt(1 - zeta**2))  # closed form
+    wd = w * np.sqrt(1 - zeta**2)
+    t_peak = np.arctan2(wd, zeta * w) / wd  # closed form of the peak time
+    d_peak = v0 / wd * np.exp(-zeta * w * t_peak) * np.sin(wd * t_peak)
+    assert ep.complete
+    # extrapolation from the free-flight side is exact: float64 round-off only
+    assert ep.start == pytest.approx(t0, rel=1e-12)
+    assert ep.end == pytest.approx(t0 + tc, rel=1e-12)
+    assert ep.approach_velocity == pytest.approx(v0, rel=1e-12)
+    assert ep.restitution == pytest.approx(e_exact, rel=1e-12)
+    # without accelerations the cubic Hermite interpolant across the kink is O(h^2) accurate
+    ep_h = contact_episodes(t, d[:, None], dd[:, None], force[:, None])[0]
+    assert ep_h.start == pytest.approx(t0, rel=2e-6)
+    assert ep_h.restitution == pytest.approx(e_exact, rel=1e-2)  # KV acceleration jumps at contact
+    assert ep.max_overlap == pytest.approx(d_peak, rel=1e-8)
+
+
+def test_two_episodes_and_open_ends():
+    t = np.linspace(0.0, 9.0, 901)
+    d = np.sin(t)  # closed on (0, pi), (2pi, 3pi): the first starts at t=0 with delta=0
+    dd = np.cos(t)
+    eps = contact_episodes(t, d[:, None], dd[:, None], d[:, None])
+    assert [round(e.start, 9) for e in eps] == [0.0, round(2 * np.pi, 9)]
+    assert eps[0].end == pytest.approx(np.pi, abs=1e-10)  # sin has its root at pi
+    assert eps[0].restitution == pytest.approx(1.0, abs=1e-9)  # |cos| equal at both roots
+    # still closed at t = 9 < 3 pi: incomplete, restitution NaN
+    assert eps[1].complete is False and np.isnan(eps[1].restitution)
+
+
+def test_overlap_rates_follow_the_interface_convention():
+    v = np.array([[-1.0, -2.0, 3.0]])
+    # interface 0: -v1; interface j: v_j - v_{j+1} (notes/CONVENTIONS.md)
+    np.testing.assert_array_equal(overlap_rates(v), [[1.0, 1.0, -5.0]])
+    np.testing.assert_array_equal(overlap_rates(v, ground=False), [[0.0, 1.0, -5.0]])
