@@ -1,0 +1,261 @@
+"""From a simulated stack to what its users need: a `Report`.
+
+`analyse(solution)` extracts, from the solver's steps of a `Solution`:
+
+- every **contact episode** of every interface, with its effective restitution
+  `e_eff = -(V2 - V1)/(v2 - v1)` (paper Eq 2; `hertz_chain.episodes`);
+- the **acceleration pulse** of every mass (`hertz_chain.pulse`), as an accelerometer fixed to the mass
+  reads it: the contact acceleration `a + g` (zero in free fall), in m/s² and g;
+- the **shock response spectrum** of the top mass's pulse (`hertz_chain.srs`: maximax absolute
+  acceleration, Q = 10, 1/12 octave, Smallwood ramp-invariant filter, ISO 18431-4);
+- the **velocity amplification**: the launch velocity of every mass over the drop speed, and the top
+  mass's kinetic-energy transfer efficiency `K_n` (paper Section 2.1: its kinetic energy after the
+  cascade over the stack's kinetic energy at impact);
+- the **comparison with the rigid model**, three ways: Eq 19 (Eq 13 without the ground) with the
+  nominal restitutions; Eq 19 with the measured `e_eff` of every interface; and the event-driven rigid
+  simulator (`hertz_chain.rigid_events`) from the same initial state with the measured `e_eff`;
+- an **independence measure** and a **regime** verdict: the rigid theory assumes that the contacts of
+  neighbouring interfaces (which share a mass) never act at once. `independence` is the largest
+  fraction of the shorter contact time during which two neighbouring interfaces are both closed
+  (0 for a perfectly sequential cascade, up to 1). The regime is "independent" when it is below
+  `INDEPENDENT_BELOW` and "overlapping" otherwise.
+
+Everything here is plain numpy on the host; no JAX tracing.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+
+import numpy as np
+
+from .episodes import ContactEpisode, contact_episodes
+from .errors import HertzChainError
+from .pulse import G0, PulseMetrics, pulse_metrics
+from .rigid import chain_gain, stack_gain
+from .rigid_events import simulate_rigid
+from .srs import ShockResponseSpectrum, srs
+
+__all__ = ["INDEPENDENT_BELOW", "RigidComparison", "Report", "analyse", "independence"]
+
+#: Largest overlap fraction of neighbouring contacts still called "independent" (1 %).
+INDEPENDENT_BELOW = 0.01
+
+
+@dataclasses.dataclass(frozen=True)
+class RigidComparison:
+    """Top-mass velocity gain predicted by the rigid independent-collision model, three ways.
+
+    A gain is None when its inputs do not exist: a measured restitution is undefined for an interface
+    that never opened and closed once with a positive approach speed (e.g. a touching stack whose
+    masses start together), and the event-driven model needs every interface's restitution. `notes`
+    says why.
+    """
+
+    nominal_gain: float | None
+    measured_restitution_gain: float | None
+    event_driven_gain: float | None
+    nominal_restitution: np.ndarray | None
+    measured_restitution: np.ndarray
+    notes: tuple[str, ...] = ()
+
+
+@dataclasses.dataclass(frozen=True)
+class Report:
+    """The analysis of one simulated stack (SI units unless a name says otherwise)."""
+
+    status: str
+    drop_speed: float
+    masses: np.ndarray
+    ground: bool
+    episodes: tuple[ContactEpisode, ...]
+    restitution: np.ndarray  # (n,) measured e_eff per interface (entry 0 = ground; NaN if undefined)
+    launch_velocities: np.ndarray
+    velocity_gains: np.ndarray
+    top_velocity_gain: float
+    top_efficiency: float
+    rigid: RigidComparison
+    pulses: tuple[PulseMetrics | None, ...]
+    top_srs: ShockResponseSpectrum | None
+    independence: float
+    regime: str
+    energy_error: float
+    num_steps: int
+    num_rejected_steps: int
+    t_final: float
+    solution: object = dataclasses.field(repr=False, default=None)
+
+    @property
+    def top_pulse(self) -> PulseMetrics | None:
+        return self.pulses[-1]
+
+    def gain_error(self, which: str = "nominal_gain") -> float | None:
+        """Relative error of the rigid prediction `which` against the simulated top gain."""
+        rigid = getattr(self.rigid, which)
+        if rigid is None:
+            return None
+        return (rigid - self.top_velocity_gain) / self.top_velocity_gain
+
+
+def independence(episodes: list[ContactEpisode] | tuple[ContactEpisode, ...], interfaces) -> float:
+    """Largest fraction of the shorter contact time during which two neighbouring interfaces
+    (`j`, `j+1`, which share mass `j+1`) are both closed; 0 when the cascade is sequential."""
+    by_if: dict[int, list[tuple[float, float]]] = {}
+    for ep in episodes:
+        by_if.setdefault(ep.interface, []).append((ep.start, ep.end))
+    worst = 0.0
+    for j in interfaces:
+        a, b = by_if.get(j, []), by_if.get(j + 1, [])
+        if not a or not b:
+            continue
+        both = sum(max(0.0, min(e1, e2) - max(s1, s2)) for s1, e1 in a for s2, e2 in b)
+        shorter = min(sum(e - s for s, e in a), sum(e - s for s, e in b))
+        if shorter > 0:
+            worst = max(worst, both / shorter)
+    return float(min(worst, 1.0))
+
+
+def _main_restitution(episodes, n: int) -> np.ndarray:
+    """Per interface, `e_eff` of its strongest complete episode (largest approach speed)."""
+    e = np.full(n, np.nan)
+    best = np.zeros(n)
+    for ep in episodes:
+        if ep.complete and ep.approach_velocity > best[ep.interface]:
+            best[ep.interface] = ep.approach_velocity
+            e[ep.interface] = ep.restitution
+    return e
+
+
+def _rigid_comparison(sol, e_meas, e_nom, v_ref) -> RigidComparison:
+    stack = sol.stack
+    m = np.asarray(stack.masses, dtype=float)
+    n, ground = m.size, stack.ground
+    x0 = np.asarray(sol.state.positions, dtype=float)
+    v0 = np.asarray(sol.state.velocities, dtype=float)
+    notes: list[str] = []
+    first = 0 if ground else 1
+    uniform_drop = ground and np.allclose(v0, v0[0]) and v0[0] < 0
+
+    def closed_form(e):
+        if ground:
+            if not uniform_drop:
+                return None
+            return float(stack_gain(m, e, ground_restitution=e[0]))
+        if not (v0[0] > 0 and np.allclose(v0[1:], 0.0)):
+            return None
+        return float(chain_gain(m, e[1:]))
+
+    def safe(fn, label):
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                return fn()
+        except HertzChainError as exc:
+            notes.append(f"{label}: {exc}")
+            return None
+
+    nominal = None
+    if e_nom is not None:
+        e_nom = np.asarray(e_nom, dtype=float)
+        nominal = safe(lambda: closed_form(e_nom), "nominal")
+        if nominal is None and not notes:
+            notes.append("nominal: Eqs 13/19 need a dropped stack (or a struck chain at rest)")
+    measured = event = None
+    defined = np.isfinite(e_meas[first:]).all()
+    if not defined:
+        bad = [j for j in range(first, n) if not np.isfinite(e_meas[j])]
+        notes.append(f"measured restitution undefined for interface(s) {bad}: no single complete "
+                     "contact with a positive approach speed (touching or persistently loaded)")
+    else:
+        measured = safe(lambda: closed_form(e_meas), "measured")
+        gaps = np.concatenate([[x0[0]], np.diff(x0)])
+        gaps = np.maximum(gaps, 0.0)  # a preloaded (overlapping) stack starts touching
+        e_arr = np.where(np.isfinite(e_meas), e_meas, 1.0)
+
+        def run():
+            res = simulate_rigid(m, v0, gaps, e_arr, ground_restitution=e_arr[0] if ground else None,
+                                 gravity=float(stack.gravity))
+            return float(res.launch_velocities[-1] / v_ref)
+
+        event = safe(run, "event-driven")
+    return RigidComparison(nominal, measured, event, e_nom, e_meas, tuple(notes))
+
+
+def _pulse(t, a) -> PulseMetrics | None:
+    try:
+        return pulse_metrics(t, a)
+    except HertzChainError:
+        return None  # e.g. a mass that never felt a contact
+
+
+def _top_srs(t, a_g, episodes, top_if) -> ShockResponseSpectrum | None:
+    eps = [ep for ep in episodes if ep.interface in top_if]
+    if not eps:
+        return None
+    t0, t1 = min(ep.start for ep in eps), max(ep.end for ep in eps)
+    pad = 0.05 * (t1 - t0)
+    keep = (t >= t0 - pad) & (t <= t1 + pad)
+    if keep.sum() < 4:
+        return None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return srs(t[keep], a_g[keep], on_coarse="ignore")
+    except HertzChainError:
+        return None
+
+
+def analyse(solution, *, nominal_restitution=None) -> Report:
+    """Analyse a `hertz_chain.Solution` (see the module docstring for every quantity).
+
+    **Arguments:**
+
+    - `solution`: the result of `hertz_chain.simulate`.
+    - `nominal_restitution`: `(n,)` the restitution each interface was designed for (entry 0 = ground;
+      entry 0 ignored without the ground), for the nominal rigid prediction; None skips it.
+    """
+    sol = solution
+    stack = sol.stack
+    st = sol.steps
+    m = np.asarray(stack.masses, dtype=float)
+    n, ground, g = m.size, bool(stack.ground), float(stack.gravity)
+    interfaces = list(range(0 if ground else 1, n))
+    a = st.accelerations
+    dd_acc = np.concatenate([-a[:, :1], a[:, :-1] - a[:, 1:]], axis=1)  # overlap accelerations
+    episodes = contact_episodes(st.t, st.overlaps, st.overlap_rates, st.forces,
+                                accelerations=dd_acc, interfaces=interfaces)
+    e_meas = _main_restitution(episodes, n)
+    v0 = np.asarray(sol.state.velocities, dtype=float)
+    v_ref = float(np.max(np.abs(v0)))
+    launch = np.asarray(sol.launch_velocities, dtype=float)
+    gains = launch / v_ref
+    ke0 = 0.5 * float(np.sum(m * v0**2))
+    top_eff = 0.5 * m[-1] * launch[-1] ** 2 / ke0 if ke0 > 0 else float("nan")
+    a_contact = a + g  # what an accelerometer on each mass reads
+    pulses = tuple(_pulse(st.t, a_contact[:, i]) for i in range(n))
+    top_if = {n - 1} | ({n - 2} if n >= 2 and (n - 2 >= 1 or ground) else set())
+    top_srs = _top_srs(st.t, a_contact[:, -1] / G0, episodes, top_if)
+    ind = independence(episodes, interfaces)
+    return Report(
+        status=sol.status,
+        drop_speed=v_ref,
+        masses=m,
+        ground=ground,
+        episodes=tuple(episodes),
+        restitution=e_meas,
+        launch_velocities=launch,
+        velocity_gains=gains,
+        top_velocity_gain=float(gains[-1]),
+        top_efficiency=float(top_eff),
+        rigid=_rigid_comparison(sol, e_meas, nominal_restitution, v_ref),
+        pulses=pulses,
+        top_srs=top_srs,
+        independence=ind,
+        regime="independent" if ind < INDEPENDENT_BELOW else "overlapping",
+        energy_error=float(sol.energy_error),
+        num_steps=int(sol.num_steps),
+        num_rejected_steps=int(sol.num_rejected_steps),
+        t_final=float(sol.t_final),
+        solution=sol,
+    )

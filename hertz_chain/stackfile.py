@@ -1,0 +1,1262 @@
+"""Stack files: TOML with units → a validated, declarative [`StackSpec`][hertz_chain.stackfile.StackSpec].
+
+A stack file describes one shock amplifier: the drop, the masses (explicit, or an MVG/MET design of
+the seed paper, Eqs 15 and 25), the gaps, the contact law of every interface, optional materials and
+contact geometry, and the solver settings. [`load_stack_file`][hertz_chain.stackfile.load_stack_file]
+reads a file; [`parse_stack`][hertz_chain.stackfile.parse_stack] takes TOML text or an already-parsed
+`dict`. Both return a frozen `StackSpec` of plain SI floats, strings and tuples (no pint objects, no
+JAX): building the simulator's `Stack` from it (computing MVG/MET masses, stiffness from materials,
+calibrating damping to a restitution) happens elsewhere, without re-reading the file.
+
+Conventions (`notes/CONVENTIONS.md`): masses are listed **bottom first** (mass 1 touches the
+ground); interface 0 is ground–mass 1 and interface *j* is mass *j* – mass *j+1*; initial velocities
+are **upward-positive**. The drop's `impact_velocity` is stored as the positive *downward* speed of
+the whole stack when mass 1 first touches the ground.
+
+## Values and units
+
+Every dimensional value is either a string that pint parses — `"8.4 kg"`, `"1 cm"`, `"200 GPa"`,
+`"1e9 N/m^1.5"`, `"2 ft"`, `"1 us"` — or a bare TOML number, which is read in SI units (kg, m, s,
+m/s, Pa, N/m^1.5, ...). A string with the wrong dimension is an error that names the key, e.g.
+`stack.gaps: '1 kg' has units of kilogram, expected a length (e.g. '1 cm')`. Quantities are
+converted to SI once, here; the spec holds floats only.
+
+## The normative example (project issue #5)
+
+```toml
+[drop]
+impact_velocity = "1 m/s"     # or: height = "5 cm"
+gravity = 0                   # default 9.80665 m/s^2
+
+[stack]
+masses = [8.4, 3.4683, 1.4320, 0.5913, 0.2441, 0.1008]   # kg, bottom first
+gaps = "1 cm"                 # one value for all, or a list of n-1
+
+[contact]                     # default for every interface, the ground included
+law = "tsuji"
+stiffness = "1e9 N/m^1.5"
+restitution = 0.8
+
+[solver]
+rtol = 1e-10
+```
+
+## Key reference
+
+| key | value | default |
+|---|---|---|
+| `title` | free text | none |
+| **`[drop]`** | | |
+| `drop.ground` | `true` (dropped on the ground) / `false` (horizontal chain, no ground) | `true` |
+| `drop.impact_velocity` | velocity ≥ 0, downward speed at first ground contact | one of the two (with a ground) |
+| `drop.height` | length ≥ 0, free-fall height of mass 1's lower surface; v = √(2 g h) | one of the two (with a ground) |
+| `drop.gravity` | acceleration ≥ 0 | 9.80665 m/s² with a ground, 0 without |
+| **`[stack]`** | | |
+| `stack.masses` | list of ≥ 2 masses > 0, bottom first | either this or `[stack.design]` |
+| `stack.gaps` | length ≥ 0, or a list of n−1 (gap between masses j and j+1) | required |
+| `stack.velocities` | list of n velocities (upward-positive), explicit initial state | none |
+| `stack.preload` | bool: start in static equilibrium under gravity (needs gaps = 0, gravity > 0) | `false` |
+| `stack.material` | material name, or a list of n | none (then give stiffness) |
+| `stack.radius` | radius of curvature of each mass's contact caps: length > 0 or `inf` (flat), or a list of n | none |
+| `stack.shape` | `"sphere"` / `"flat"`, or a list of n | `"sphere"` when `radius` is given |
+| **`[stack.design]`** | | |
+| `kind` | `"mvg"` (power law, Eq 15) / `"met"` (maximum energy transfer, Eq 25) | required |
+| `n` | integer ≥ 2, or `"optimal"` | `"optimal"` |
+| `restitution` | design restitution e ∈ (0, 1] | `contact.restitution` |
+| `bottom_mass`, `top_mass`, `mass_ratio` | masses > 0; R = m_n/m_1 ∈ (0, 1) | see below |
+| **`[ground]`** | (only with a ground) | |
+| `ground.material` | material name | none: rigid ground |
+| `ground.shape` | `"flat"` / `"sphere"` | `"flat"` |
+| `ground.radius` | length > 0 (sphere only) | `inf` |
+| **`[materials.NAME]`** | define or override a material by name | |
+| `youngs_modulus` | pressure > 0 | required |
+| `poisson_ratio` | number in (−1, 0.5] | required |
+| `density` | density > 0 | none |
+| **`[contact]`**, `[contact.ground]`, `[[contact.interface]]` | | |
+| `law` | `"hertz"`, `"hunt-crossley"`, `"tsuji"`, `"kelvin-voigt"`, `"viscoelastic"` | required in `[contact]` |
+| `stiffness` | N/m^1.5 (Hertzian laws) or N/m (`kelvin-voigt`), > 0 | from materials and geometry |
+| `restitution` | e ∈ (0, 1]; ground: e > 0 | one of restitution / alpha / damping |
+| `chi_map` | `hunt-crossley` only: `"hunt-crossley"`, `"herbert-mcwhannell"`, `"lankarani-nikravesh"`, `"gonthier"`, `"flores"`, `"hu-guo"`, `"zhiying-qishao"`, `"exact"` | `"exact"` |
+| `calibration_velocity` | velocity > 0 (`hunt-crossley`, `viscoelastic` with restitution) | builder's choice (see below) |
+| `alpha` | s/m ≥ 0 (`hunt-crossley`) | none |
+| `damping` | ≥ 0: `tsuji` η (plain number), `kelvin-voigt` c (N s/m), `viscoelastic` A (s) | none |
+| `clamp` | bool: force clamped at F ≥ 0 | `true` |
+| `index` | `[[contact.interface]]` only: interface number j ∈ [1, n−1], or a list | required |
+| **`[solver]`** | | |
+| `solver` | `"tsit5"`, `"dopri8"`, `"kvaerno5"` | `"tsit5"` |
+| `rtol`, `atol` | numbers in (0, 1) and > 0 | simulator's default |
+| `t_max` | time > 0 | simulator's default |
+| `max_steps` | integer ≥ 1 | simulator's default |
+| `n_output` / `dt_output` | integer ≥ 2 / time > 0 (one of them) | simulator's default |
+
+A spec value of `None` means "not given": the builder or simulator applies its own default.
+
+## The drop
+
+With a ground (`drop.ground = true`, the default) exactly one of `drop.impact_velocity`,
+`drop.height` and `stack.velocities` sets the initial state. A height is converted with the file's
+own gravity, v = √(2 g h) (free fall of the whole stack through h). With `gravity = 0` nothing
+falls, so a height is ill-defined and is an error: give `impact_velocity` instead. (Using the
+standard gravity for the fall and zero gravity for the impacts would silently mix two worlds.)
+`drop.gravity` defaults to standard gravity, 9.80665 m/s² (CGPM 1901).
+
+## Contact sections and overrides
+
+`[contact]` is the default law of every interface, the ground (interface 0) included.
+`[contact.ground]` overrides the ground contact; `[[contact.interface]]` (an array of tables, each
+with an `index`, one interface number or a list of them) overrides interfaces 1..n−1. Interface 0
+is set only through `[contact.ground]`.
+
+An override inherits every key of `[contact]` that it does not set, with two rules:
+
+* an override that sets a **different `law`** starts afresh and inherits only `clamp`;
+* an override that sets its own damping (`restitution`, `alpha` or `damping`) drops the inherited
+  damping keys (`restitution`, `alpha`, `damping`, and `chi_map`/`calibration_velocity` unless it
+  sets `restitution`).
+
+Damping per law: `hertz` has none (elastic); `hunt-crossley` takes `alpha`, or `restitution` with
+`chi_map` (default `"exact"`) and an optional `calibration_velocity`; `tsuji` and `kelvin-voigt`
+take `restitution` or `damping` (their restitution does not depend on the impact velocity);
+`viscoelastic` takes `restitution` (with an optional `calibration_velocity`) or `damping` (= A).
+`calibration_velocity` unset (`None`) leaves the choice to the builder (the approach speed that the
+rigid model predicts for that interface). Keys that a law does not use are errors. The ground's
+restitution may exceed 1 (an apparent restitution, e.g. a driven anvil); an interface's is in (0, 1].
+
+```toml
+[contact]
+law = "hunt-crossley"
+stiffness = "2.5e9 N/m^1.5"
+restitution = 0.8
+chi_map = "flores"
+calibration_velocity = "1 m/s"
+
+[contact.ground]              # interface 0
+law = "kelvin-voigt"          # a different law: nothing inherited but clamp
+stiffness = "5e7 N/m"
+restitution = 0.9
+
+[[contact.interface]]
+index = 3                     # mass 3 – mass 4
+stiffness = "1e9 N/m^1.5"     # same law: inherits restitution, chi_map, calibration_velocity
+
+[[contact.interface]]
+index = [4, 5]
+alpha = "0.3 s/m"             # replaces the inherited restitution/chi_map/calibration_velocity
+clamp = false
+```
+
+## Designs instead of masses
+
+`[stack.design]` replaces `stack.masses`; the masses are computed later by the rigid module.
+MVG (power law, Eq 15): give two of `bottom_mass`, `top_mass`, `mass_ratio` (the third follows from
+R = m_n/m_1) and `n` (an integer, or `"optimal"`: Eqs 22–24). MET (Eq 25, ratios fixed by e): give
+`n` and one of `bottom_mass`/`top_mass`, or `n = "optimal"` and two of the three (the n whose MET
+chain matches R). With `n = "optimal"` the number of masses is unknown here, so `gaps`, `radius`,
+`shape` and `material` must be single values and `stack.velocities` is not allowed.
+
+```toml
+[drop]
+height = "5 cm"
+
+[stack]
+gaps = 0
+[stack.design]
+kind = "mvg"
+mass_ratio = 0.012            # R = m_n / m_1
+bottom_mass = "8.4 kg"
+restitution = 0.8
+n = "optimal"                 # or 6
+
+[contact]
+law = "tsuji"
+stiffness = "1e9 N/m^1.5"
+restitution = 0.8
+```
+
+## Materials and geometry instead of stiffness
+
+When a contact section gives no `stiffness`, the Hertz stiffness k = (4/3) E* √R* (Hertz 1882;
+Johnson, *Contact Mechanics*, 1985, Eq 4.22) is computed from the materials and the contact caps:
+1/E* = (1−ν₁²)/E₁ + (1−ν₂²)/E₂ and 1/R* = 1/R₁ + 1/R₂ (a flat face has R = ∞; at least one of the
+two faces must be curved). Each mass has one radius of curvature for both its caps. A material name
+refers to `[materials.NAME]` in the file, else to the package's material table (checked when the
+stack is built). The ground is flat and rigid unless `[ground]` says otherwise.
+
+```toml
+[drop]
+impact_velocity = "2 m/s"
+
+[stack]
+masses = ["1 kg", "400 g", "160 g"]
+gaps = ["2 mm", "1 mm"]
+material = ["AISI 52100", "AISI 52100", "my steel"]
+radius = ["5 cm", "3 cm", inf]
+shape = ["sphere", "sphere", "flat"]
+
+[materials."my steel"]
+youngs_modulus = "200 GPa"
+poisson_ratio = 0.3
+density = "7850 kg/m^3"
+
+[ground]
+material = "AISI 1045"
+shape = "flat"
+
+[contact]
+law = "hunt-crossley"
+restitution = 0.85
+```
+
+## A horizontal chain and a resting stack
+
+```toml
+[drop]
+ground = false                # no ground, no interface 0; gravity defaults to 0
+
+[stack]
+masses = ["1 kg", "0.5 kg", "0.25 kg"]
+gaps = "1 mm"
+velocities = ["1 m/s", 0, 0]  # upward-positive (here: along the chain axis)
+
+[contact]
+law = "hertz"
+stiffness = "5e9 N/m^1.5"
+```
+
+```toml
+[drop]
+impact_velocity = "1.5 m/s"
+
+[stack]
+masses = [8.4, 3.4683, 1.4320]
+gaps = 0
+preload = true                # interfaces 1..n-1 start compressed by the weight above them
+                              # (interface 0 too when impact_velocity = 0: resting on the ground)
+```
+
+## Errors
+
+Every problem raises [`StackFileError`][hertz_chain.errors.StackFileError] with one line naming the
+dotted key (`contact.stiffness`, `stack.masses[2]`, `contact.interface[0].index`) and the problem;
+an unknown key suggests the closest valid one (`difflib`), a broken file quotes tomllib's line and
+column. The exception carries `.key` (or `None`) and `.problem`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, Mapping
+
+from .errors import StackFileError
+
+__all__ = [
+    "STANDARD_GRAVITY",
+    "CONTACT_LAWS",
+    "CHI_MAPS",
+    "SOLVERS",
+    "DESIGN_KINDS",
+    "SHAPES",
+    "MaterialSpec",
+    "DesignSpec",
+    "BodiesSpec",
+    "DropSpec",
+    "GroundSpec",
+    "ContactSpec",
+    "ContactsSpec",
+    "SolverSpec",
+    "StackSpec",
+    "load_stack_file",
+    "parse_stack",
+    "parse_quantity",
+]
+
+STANDARD_GRAVITY = 9.80665  # m/s^2, standard acceleration of gravity (3rd CGPM, 1901)
+
+CONTACT_LAWS = ("hertz", "hunt-crossley", "tsuji", "kelvin-voigt", "viscoelastic")
+CHI_MAPS = (
+    "hunt-crossley",
+    "herbert-mcwhannell",
+    "lankarani-nikravesh",
+    "gonthier",
+    "flores",
+    "hu-guo",
+    "zhiying-qishao",
+    "exact",
+)
+SOLVERS = ("tsit5", "dopri8", "kvaerno5")
+DESIGN_KINDS = ("mvg", "met")
+SHAPES = ("sphere", "flat")
+
+_TOP_KEYS = ("title", "drop", "stack", "ground", "contact", "materials", "solver")
+_DROP_KEYS = ("ground", "impact_velocity", "height", "gravity")
+_STACK_KEYS = ("masses", "design", "gaps", "velocities", "preload", "material", "radius", "shape")
+_DESIGN_KEYS = ("kind", "n", "restitution", "bottom_mass", "top_mass", "mass_ratio")
+_GROUND_KEYS = ("material", "shape", "radius")
+_MATERIAL_KEYS = ("youngs_modulus", "poisson_ratio", "density")
+_CONTACT_KEYS = (
+    "law",
+    "stiffness",
+    "restitution",
+    "chi_map",
+    "calibration_velocity",
+    "alpha",
+    "damping",
+    "clamp",
+)
+_SOLVER_KEYS = ("solver", "rtol", "atol", "t_max", "max_steps", "n_output", "dt_output")
+
+_HERTZIAN = ("hertz", "hunt-crossley", "tsuji", "viscoelastic")
+
+# dimension name -> (a unit of that dimension, how the error message describes it)
+_DIMENSIONS = {
+    "dimensionless": ("dimensionless", "a plain number (e.g. 0.8)"),
+    "length": ("m", "a length (e.g. '1 cm')"),
+    "mass": ("kg", "a mass (e.g. '1 kg')"),
+    "time": ("s", "a time (e.g. '1 us')"),
+    "velocity": ("m/s", "a velocity (e.g. '1 m/s')"),
+    "acceleration": ("m/s^2", "an acceleration (e.g. '9.81 m/s^2')"),
+    "pressure": ("Pa", "a pressure (e.g. '200 GPa')"),
+    "density": ("kg/m^3", "a density (e.g. '7850 kg/m^3')"),
+    "hertz_stiffness": ("N/m^1.5", "a Hertzian stiffness in N/m^1.5 (e.g. '1e9 N/m^1.5')"),
+    "linear_stiffness": ("N/m", "a linear stiffness in N/m (e.g. '5e7 N/m')"),
+    "viscous_damping": ("N*s/m", "a damping coefficient in N s/m (e.g. '50 N*s/m')"),
+    "inverse_velocity": ("s/m", "an inverse velocity in s/m (e.g. '0.3 s/m')"),
+}
+
+
+# --------------------------------------------------------------------------------------------------
+# The spec: frozen dataclasses of plain SI floats, strings and tuples
+# --------------------------------------------------------------------------------------------------
+
+
+def _expand(value: Any, count: int, what: str) -> tuple:
+    """A single value repeated `count` times, or a tuple checked to have `count` entries."""
+    if isinstance(value, tuple):
+        if len(value) != count:
+            raise ValueError(f"{what} has {len(value)} entries, expected {count}")
+        return value
+    return (value,) * count
+
+
+@dataclass(frozen=True)
+class MaterialSpec:
+    """A material defined in the file (`[materials.NAME]`).
+
+    `youngs_modulus` in Pa, `poisson_ratio` dimensionless, `density` in kg/m³ (or `None`).
+    """
+
+    name: str
+    youngs_modulus: float
+    poisson_ratio: float
+    density: float | None = None
+
+
+@dataclass(frozen=True)
+class DesignSpec:
+    """An MVG (seed paper Eq 15) or MET (Eq 25) design, left for the rigid module to compute.
+
+    `n` is `None` for `"optimal"`. Masses in kg; `mass_ratio` is R = m_n/m_1. For MVG all three of
+    `bottom_mass`, `top_mass`, `mass_ratio` are filled in (two given, the third derived); for MET
+    with an integer `n` exactly one of `bottom_mass`/`top_mass` is set and `mass_ratio` is `None`.
+    """
+
+    kind: str
+    n: int | None
+    restitution: float
+    bottom_mass: float | None = None
+    top_mass: float | None = None
+    mass_ratio: float | None = None
+
+
+@dataclass(frozen=True)
+class BodiesSpec:
+    """The masses and their per-body properties (`[stack]`).
+
+    Exactly one of `masses` (kg, bottom first) and `design` is set. Per-body and per-gap values are
+    a single value (the same for all; always so when the number of masses is not known yet) or a
+    tuple with one entry per mass (per gap for `gaps`, n−1 entries); use the `*_list(n)` methods to
+    get tuples. `gaps` in m; `velocities` in m/s, upward-positive, or `None`; `radius` in m
+    (`inf` for a flat face) or `None`; `shape` `"sphere"`/`"flat"` or `None`; `material` names or
+    `None`.
+    """
+
+    masses: tuple[float, ...] | None
+    design: DesignSpec | None
+    gaps: float | tuple[float, ...]
+    velocities: tuple[float, ...] | None = None
+    preload: bool = False
+    material: str | tuple[str, ...] | None = None
+    radius: float | tuple[float, ...] | None = None
+    shape: str | tuple[str, ...] | None = None
+
+    @property
+    def n(self) -> int | None:
+        """The number of masses, or `None` while an `"optimal"` design leaves it open."""
+        if self.masses is not None:
+            return len(self.masses)
+        return self.design.n if self.design is not None else None
+
+    def gap_list(self, n: int) -> tuple[float, ...]:
+        """The n−1 gaps (m) between masses j and j+1, j = 1..n−1."""
+        return _expand(self.gaps, n - 1, "stack.gaps")
+
+    def radius_list(self, n: int) -> tuple[float, ...] | None:
+        """The n cap radii (m; `inf` = flat), or `None` when no geometry was given."""
+        return None if self.radius is None else _expand(self.radius, n, "stack.radius")
+
+    def shape_list(self, n: int) -> tuple[str, ...] | None:
+        """The n shapes, or `None` when no geometry was given."""
+        return None if self.shape is None else _expand(self.shape, n, "stack.shape")
+
+    def material_list(self, n: int) -> tuple[str, ...] | None:
+        """The n material names, or `None` when no material was given."""
+        return None if self.material is None else _expand(self.material, n, "stack.material")
+
+
+@dataclass(frozen=True)
+class DropSpec:
+    """`[drop]`: `gravity` in m/s² (≥ 0, acting downward); `impact_velocity` in m/s, the positive
+    downward speed at first ground contact (`None` when `stack.velocities` sets the state, or
+    without a ground); `height` in m when the file gave one (`impact_velocity` = √(2 g h))."""
+
+    gravity: float
+    impact_velocity: float | None = None
+    height: float | None = None
+
+
+@dataclass(frozen=True)
+class GroundSpec:
+    """`[ground]`: `material` name (`None`: rigid), `shape`, `radius` in m (`inf` when flat)."""
+
+    material: str | None = None
+    shape: str = "flat"
+    radius: float = math.inf
+
+
+@dataclass(frozen=True)
+class ContactSpec:
+    """One resolved contact law (defaults and inheritance already applied), SI units.
+
+    `stiffness` is N/m^1.5 for the Hertzian laws and N/m for `kelvin-voigt`; `None` means "compute
+    it from materials and geometry". Damping is one of `restitution` (with `chi_map` and an optional
+    `calibration_velocity` in m/s), `alpha` (s/m, hunt-crossley) or `damping` (tsuji η, plain;
+    kelvin-voigt c, N s/m; viscoelastic A, s); all `None` for `hertz`. `source` is the dotted key of
+    the section that defined it (for error messages at build time).
+    """
+
+    law: str
+    stiffness: float | None = None
+    restitution: float | None = None
+    chi_map: str | None = None
+    calibration_velocity: float | None = None
+    alpha: float | None = None
+    damping: float | None = None
+    clamp: bool = True
+    source: str = "contact"
+
+
+@dataclass(frozen=True)
+class ContactsSpec:
+    """The contact of every interface: `default` (`[contact]`), `ground` (interface 0: the
+    `[contact.ground]` override or the default; `None` without a ground) and `overrides`, pairs
+    `(j, ContactSpec)` sorted by j, from `[[contact.interface]]`."""
+
+    default: ContactSpec
+    ground: ContactSpec | None = None
+    overrides: tuple[tuple[int, ContactSpec], ...] = ()
+
+    def interface(self, j: int) -> ContactSpec:
+        """The contact of interface `j` (0 = ground–mass 1, j = mass j – mass j+1)."""
+        if j == 0:
+            if self.ground is None:
+                raise ValueError("this stack has no ground, so no interface 0")
+            return self.ground
+        for index, spec in self.overrides:
+            if index == j:
+                return spec
+        return self.default
+
+
+@dataclass(frozen=True)
+class SolverSpec:
+    """`[solver]`; `None` leaves the simulator's default. `t_max`, `dt_output` in s."""
+
+    solver: str = "tsit5"
+    rtol: float | None = None
+    atol: float | None = None
+    t_max: float | None = None
+    max_steps: int | None = None
+    n_output: int | None = None
+    dt_output: float | None = None
+
+
+@dataclass(frozen=True)
+class StackSpec:
+    """A whole stack file, validated, in SI units. `ground` is `None` for a chain without ground."""
+
+    drop: DropSpec
+    stack: BodiesSpec
+    contact: ContactsSpec
+    ground: GroundSpec | None = GroundSpec()
+    solver: SolverSpec = SolverSpec()
+    materials: tuple[MaterialSpec, ...] = ()
+    title: str | None = None
+    source: str | None = None
+
+    @property
+    def n(self) -> int | None:
+        """Number of masses (`None` for an `"optimal"` design, decided by the rigid module)."""
+        return self.stack.n
+
+    @property
+    def has_ground(self) -> bool:
+        return self.ground is not None
+
+    def contact_for(self, j: int) -> ContactSpec:
+        """The contact law of interface `j` (see `ContactsSpec.interface`)."""
+        return self.contact.interface(j)
+
+    def material(self, name: str) -> MaterialSpec | None:
+        """The material `name` if the file defines it in `[materials]`, else `None`."""
+        for m in self.materials:
+            if m.name == name:
+                return m
+        return None
+
+    def initial_velocities(self, n: int | None = None) -> tuple[float, ...]:
+        """Upward-positive initial velocities (m/s): `stack.velocities`, or −impact_velocity for
+        every mass of a dropped stack. `n` is needed only when the spec leaves it open."""
+        if self.stack.velocities is not None:
+            return self.stack.velocities
+        n = self.n if n is None else n
+        if n is None:
+            raise ValueError("the number of masses is not known yet: pass n")
+        return (-float(self.drop.impact_velocity),) * n
+
+
+# --------------------------------------------------------------------------------------------------
+# Errors and low-level readers
+# --------------------------------------------------------------------------------------------------
+
+
+def _error(key: str | None, problem: str) -> StackFileError:
+    problem = " ".join(str(problem).splitlines())
+    exc = StackFileError(f"{key}: {problem}" if key else problem)
+    exc.key, exc.problem = key, problem
+    return exc
+
+
+def _join(path: str, key: str) -> str:
+    return f"{path}.{key}" if path else key
+
+
+def _show(raw: Any) -> str:
+    """How a raw value is quoted in messages: '1 kg' for strings, 3.5 for numbers."""
+    return repr(raw) if isinstance(raw, str) else str(raw)
+
+
+def _table(raw: Any, path: str, allowed: tuple[str, ...]) -> dict:
+    """Check that `raw` is a table with only `allowed` keys (suggesting the closest one)."""
+    if not isinstance(raw, Mapping):
+        raise _error(path, f"expected a table ([{path}]), got {_show(raw)}")
+    for key in raw:
+        if key not in allowed:
+            close = difflib.get_close_matches(str(key), allowed, n=1, cutoff=0.6)
+            hint = f"did you mean '{close[0]}'?" if close else f"allowed: {', '.join(allowed)}"
+            raise _error(_join(path, str(key)), f"unknown key; {hint}")
+    return dict(raw)
+
+
+@lru_cache(maxsize=1)
+def _ureg():
+    """The one shared pint UnitRegistry, created on first use (pint is slow to import)."""
+    import pint
+
+    return pint.UnitRegistry()
+
+
+@lru_cache(maxsize=None)
+def _dimensionality(dim: str):
+    return _ureg().Quantity(1, _DIMENSIONS[dim][0]).dimensionality
+
+
+def parse_quantity(raw: Any, dim: str, key: str = "value", *, allow_inf: bool = False) -> float:
+    """Convert `raw` (a pint string such as `"1 cm"`, a bare SI number, or a pint Quantity) to an
+    SI float of dimension `dim` (a key of the dimension table: `"length"`, `"mass"`, `"time"`,
+    `"velocity"`, `"acceleration"`, `"pressure"`, `"density"`, `"hertz_stiffness"`,
+    `"linear_stiffness"`, `"viscous_damping"`, `"inverse_velocity"`, `"dimensionless"`).
+
+    Raises `StackFileError` naming `key` for the wrong dimension, an unparseable string, a
+    non-number or a non-finite value (`inf` is allowed with `allow_inf`).
+    """
+    desc = _DIMENSIONS[dim][1]
+    if isinstance(raw, bool):
+        raise _error(key, f"expected {desc}, got a boolean ({str(raw).lower()})")
+    if isinstance(raw, (int, float)):
+        value = float(raw)
+    elif isinstance(raw, str) or hasattr(raw, "dimensionality"):
+        if isinstance(raw, str):
+            if not raw.strip():
+                raise _error(key, f"empty string; expected {desc}")
+            try:
+                q = _ureg().Quantity(raw)
+            except Exception as exc:  # pint raises many types (UndefinedUnitError, TokenError, ...)
+                reason = str(exc).strip() if "not defined" in str(exc) else "not a number with units"
+                raise _error(key, f"cannot parse {raw!r} as a quantity ({reason}); expected {desc}") from None
+        else:
+            q = raw
+        if not hasattr(q, "dimensionality"):  # a string such as "3" parses to a plain number
+            value = q
+        elif str(q.units) == "dimensionless":  # no units at all ("0.5"): SI, like a bare number
+            value = q.magnitude
+        elif q.dimensionality != _dimensionality(dim):
+            shown = _show(raw) if isinstance(raw, str) else repr(str(q))
+            raise _error(key, f"{shown} has units of {q.units}, expected {desc}")
+        else:
+            value = q.to_base_units().magnitude if dim != "dimensionless" else q.to("dimensionless").magnitude
+        try:
+            value = float(value)
+        except (TypeError, ValueError):
+            raise _error(key, f"cannot convert {_show(raw)} to a number; expected {desc}") from None
+    else:
+        if isinstance(raw, (list, tuple)):
+            kind = "a list"
+        else:
+            kind = "a table" if isinstance(raw, Mapping) else type(raw).__name__
+        raise _error(key, f"expected {desc}, got {kind}")
+    if math.isnan(value) or (math.isinf(value) and not allow_inf):
+        raise _error(key, f"{_show(raw)} is not a finite number")
+    return value
+
+
+def _check(ok: bool, key: str, raw: Any, requirement: str) -> None:
+    if not ok:
+        raise _error(key, f"{_show(raw)} is invalid: {requirement}")
+
+
+def _positive(raw: Any, key: str, dim: str, *, allow_inf: bool = False) -> float:
+    value = parse_quantity(raw, dim, key, allow_inf=allow_inf)
+    _check(value > 0, key, raw, "must be > 0")
+    return value
+
+
+def _non_negative(raw: Any, key: str, dim: str) -> float:
+    value = parse_quantity(raw, dim, key)
+    _check(value >= 0, key, raw, "must be >= 0")
+    return value
+
+
+def _choice(raw: Any, key: str, choices: tuple[str, ...]) -> str:
+    if not isinstance(raw, str) or raw.strip().lower() not in choices:
+        close = difflib.get_close_matches(str(raw).lower(), choices, n=1, cutoff=0.6)
+        hint = f" (did you mean '{close[0]}'?)" if close else ""
+        raise _error(key, f"{_show(raw)} is not one of {', '.join(repr(c) for c in choices)}{hint}")
+    return raw.strip().lower()
+
+
+def _bool(raw: Any, key: str) -> bool:
+    if not isinstance(raw, bool):
+        raise _error(key, f"{_show(raw)} is not a boolean; expected true or false")
+    return raw
+
+
+def _int(raw: Any, key: str, minimum: int) -> int:
+    if isinstance(raw, bool) or not isinstance(raw, int):
+        if isinstance(raw, float) and raw.is_integer():
+            raw = int(raw)
+        else:
+            raise _error(key, f"{_show(raw)} is not an integer")
+    _check(raw >= minimum, key, raw, f"must be an integer >= {minimum}")
+    return raw
+
+
+def _name(raw: Any, key: str) -> str:
+    if not isinstance(raw, str) or not raw.strip():
+        raise _error(key, f"{_show(raw)} is not a name; expected a non-empty string")
+    return raw.strip()
+
+
+def _per_item(raw: Any, key: str, count: int | None, reader, per: str = "mass"):
+    """A single value, or a list with `count` entries (one `per` mass or gap); `reader(item,
+    item_key)` converts each. A list needs a known `count` (n not left 'optimal')."""
+    if isinstance(raw, (list, tuple)):
+        if count is None:
+            raise _error(
+                key,
+                "a list needs a known number of masses; with n = 'optimal' give one value for all",
+            )
+        if len(raw) != count:
+            raise _error(key, f"has {len(raw)} entries, expected {count} (one per {per})")
+        return tuple(reader(item, f"{key}[{i}]") for i, item in enumerate(raw))
+    return reader(raw, key)
+
+
+# --------------------------------------------------------------------------------------------------
+# Sections
+# --------------------------------------------------------------------------------------------------
+
+
+def _parse_materials(raw: Any) -> tuple[MaterialSpec, ...]:
+    if not isinstance(raw, Mapping):
+        raise _error("materials", "expected tables [materials.NAME]")
+    out = []
+    for name, body in raw.items():
+        bare = str(name).replace("_", "").replace("-", "").isalnum()  # a TOML bare key
+        path = f"materials.{name}" if bare else f'materials."{name}"'
+        t = _table(body, path, _MATERIAL_KEYS)
+        for req in ("youngs_modulus", "poisson_ratio"):
+            if req not in t:
+                raise _error(_join(path, req), "missing")
+        E = _positive(t["youngs_modulus"], _join(path, "youngs_modulus"), "pressure")
+        nu = parse_quantity(t["poisson_ratio"], "dimensionless", _join(path, "poisson_ratio"))
+        _check(-1 < nu <= 0.5, _join(path, "poisson_ratio"), t["poisson_ratio"], "must be in (-1, 0.5]")
+        rho = _positive(t["density"], _join(path, "density"), "density") if "density" in t else None
+        out.append(MaterialSpec(str(name), E, nu, rho))
+    return tuple(out)
+
+
+def _parse_drop(raw: Any) -> tuple[bool, dict]:
+    t = _table(raw, "drop", _DROP_KEYS)
+    ground = _bool(t["ground"], "drop.ground") if "ground" in t else True
+    return ground, t
+
+
+def _merge_contact(default: dict, override: dict, path: str) -> dict:
+    """Apply the inheritance rules of the module docstring. Values are `(raw, dotted_key)`."""
+    own = {k: (v, _join(path, k)) for k, v in override.items() if k != "index"}
+    default_law = default.get("law", (None,))[0]
+    if "law" in own and str(own["law"][0]).strip().lower() != str(default_law).strip().lower():
+        base = {k: v for k, v in default.items() if k == "clamp"}
+    else:
+        base = dict(default)
+        if any(k in own for k in ("restitution", "alpha", "damping")):
+            for k in ("restitution", "alpha", "damping"):
+                base.pop(k, None)
+            if "restitution" not in own:
+                base.pop("chi_map", None)
+                base.pop("calibration_velocity", None)
+    base.update(own)
+    return base
+
+
+def _resolve_contact(merged: dict, label: str, *, ground: bool) -> ContactSpec:
+    """Validate one merged contact section (`label` names it: `contact`, `contact.ground`, ...)."""
+    if "law" not in merged:
+        raise _error(_join(label, "law"), f"missing; one of {', '.join(repr(c) for c in CONTACT_LAWS)}")
+    law_raw, law_key = merged["law"]
+    law = _choice(law_raw, law_key, CONTACT_LAWS)
+    allowed = {
+        "hertz": {"stiffness", "clamp"},
+        "hunt-crossley": {"stiffness", "clamp", "restitution", "chi_map", "calibration_velocity", "alpha"},
+        "tsuji": {"stiffness", "clamp", "restitution", "damping"},
+        "kelvin-voigt": {"stiffness", "clamp", "restitution", "damping"},
+        "viscoelastic": {"stiffness", "clamp", "restitution", "calibration_velocity", "damping"},
+    }[law]
+    hints = {
+        "hertz": "the 'hertz' law is elastic (no damping)",
+        "hunt-crossley": "'hunt-crossley' takes alpha, or restitution with chi_map",
+        "tsuji": "'tsuji' takes restitution or damping (eta)",
+        "kelvin-voigt": "'kelvin-voigt' takes restitution or damping (c, N s/m)",
+        "viscoelastic": "'viscoelastic' takes restitution (with calibration_velocity) or damping (A, s)",
+    }
+    for k, (raw, key) in merged.items():
+        if k != "law" and k not in allowed:
+            raise _error(key, f"not used by law {law!r}; {hints[law]}")
+
+    def get(k):
+        return merged[k] if k in merged else (None, None)
+
+    stiffness = None
+    if "stiffness" in merged:
+        raw, key = merged["stiffness"]
+        stiffness = _positive(raw, key, "linear_stiffness" if law == "kelvin-voigt" else "hertz_stiffness")
+    elif law == "kelvin-voigt":
+        raise _error(
+            _join(label, "stiffness"),
+            "missing; 'kelvin-voigt' needs a stiffness in N/m (it cannot be computed from "
+            "materials)",
+        )
+
+    restitution = None
+    if "restitution" in merged:
+        raw, key = merged["restitution"]
+        restitution = parse_quantity(raw, "dimensionless", key)
+        if ground:
+            _check(restitution > 0, key, raw, "the ground restitution must be > 0")
+        else:
+            _check(0 < restitution <= 1, key, raw, "must be in (0, 1]")
+    alpha = None
+    if "alpha" in merged:
+        raw, key = merged["alpha"]
+        alpha = _non_negative(raw, key, "inverse_velocity")
+    damping = None
+    if "damping" in merged:
+        raw, key = merged["damping"]
+        dim = {"tsuji": "dimensionless", "kelvin-voigt": "viscous_damping", "viscoelastic": "time"}[law]
+        damping = _non_negative(raw, key, dim)
+    chi_map = None
+    if "chi_map" in merged:
+        raw, key = merged["chi_map"]
+        chi_map = _choice(raw, key, CHI_MAPS)
+    calibration_velocity = None
+    if "calibration_velocity" in merged:
+        raw, key = merged["calibration_velocity"]
+        calibration_velocity = _positive(raw, key, "velocity")
+    clamp = _bool(*merged["clamp"]) if "clamp" in merged else True
+
+    if law != "hertz":
+        given = [k for k in ("restitution", "alpha", "damping") if k in merged]
+        options = "alpha or restitution" if law == "hunt-crossley" else "restitution or damping"
+        if not given:
+            raise _error(_join(label, "restitution"), f"missing; law {law!r} needs {options}")
+        if len(given) > 1:
+            raise _error(
+                merged[given[1]][1],
+                f"conflicts with {merged[given[0]][1]}; law {law!r} takes one of {options}",
+            )
+        if restitution is None:
+            for k in ("chi_map", "calibration_velocity"):
+                if k in merged:
+                    raise _error(
+                        merged[k][1],
+                        "only used to calibrate a restitution; remove it or give restitution",
+                    )
+        elif law == "hunt-crossley" and chi_map is None:
+            chi_map = "exact"
+    return ContactSpec(
+        law, stiffness, restitution, chi_map, calibration_velocity, alpha, damping, clamp, label
+    )
+
+
+def _parse_contact(raw: Any, *, has_ground: bool) -> tuple[ContactsSpec, list]:
+    if raw is None:
+        raise _error("contact", "missing section [contact] (the default contact law)")
+    t = _table(raw, "contact", _CONTACT_KEYS + ("ground", "interface"))
+    default_raw = {k: (v, f"contact.{k}") for k, v in t.items() if k in _CONTACT_KEYS}
+    default = _resolve_contact(default_raw, "contact", ground=False)
+
+    ground = None
+    if "ground" in t:
+        if not has_ground:
+            raise _error("contact.ground", "given but drop.ground = false (no ground contact)")
+        g = _table(t["ground"], "contact.ground", _CONTACT_KEYS)
+        merged = _merge_contact(default_raw, g, "contact.ground")
+        ground = _resolve_contact(merged, "contact.ground", ground=True)
+    elif has_ground:
+        ground = _resolve_contact(default_raw, "contact", ground=True)
+
+    overrides: list[tuple[int, ContactSpec, str]] = []
+    if "interface" in t:
+        entries = t["interface"]
+        if isinstance(entries, Mapping):
+            entries = [entries]
+        if not isinstance(entries, list):
+            raise _error("contact.interface", "expected [[contact.interface]] tables, each with an index")
+        seen: dict[int, str] = {}
+        for pos, entry in enumerate(entries):
+            path = f"contact.interface[{pos}]"
+            e = _table(entry, path, ("index",) + _CONTACT_KEYS)
+            if "index" not in e:
+                raise _error(
+                    f"{path}.index",
+                    "missing; the interface number j (mass j - mass j+1), or a list",
+                )
+            idx_raw = e["index"]
+            indices = idx_raw if isinstance(idx_raw, list) else [idx_raw]
+            if not indices:
+                raise _error(f"{path}.index", "empty list")
+            spec = _resolve_contact(_merge_contact(default_raw, e, path), path, ground=False)
+            for i, item in enumerate(indices):
+                ikey = f"{path}.index" if not isinstance(idx_raw, list) else f"{path}.index[{i}]"
+                if isinstance(item, int) and not isinstance(item, bool) and item == 0:
+                    raise _error(ikey, "interface 0 is the ground contact; set it in [contact.ground]")
+                j = _int(item, ikey, 1)
+                if j in seen:
+                    raise _error(ikey, f"interface {j} is already set by {seen[j]}")
+                seen[j] = path
+                overrides.append((j, spec, ikey))
+    overrides.sort(key=lambda item: item[0])
+    contacts = ContactsSpec(default, ground, tuple((j, s) for j, s, _ in overrides))
+    return contacts, overrides
+
+
+def _parse_design(raw: Any, default_restitution: float | None) -> DesignSpec:
+    t = _table(raw, "stack.design", _DESIGN_KEYS)
+    if "kind" not in t:
+        raise _error("stack.design.kind", "missing; 'mvg' or 'met'")
+    kind = _choice(t["kind"], "stack.design.kind", DESIGN_KINDS)
+    n_raw = t.get("n", "optimal")
+    if isinstance(n_raw, str) and n_raw.strip().lower() == "optimal":
+        n = None
+    elif isinstance(n_raw, str):
+        raise _error("stack.design.n", f"{n_raw!r} is invalid: an integer >= 2 or 'optimal'")
+    else:
+        n = _int(n_raw, "stack.design.n", 2)
+    if "restitution" in t:
+        e = parse_quantity(t["restitution"], "dimensionless", "stack.design.restitution")
+        _check(0 < e <= 1, "stack.design.restitution", t["restitution"], "must be in (0, 1]")
+    elif default_restitution is not None and 0 < default_restitution <= 1:
+        e = default_restitution
+    else:
+        raise _error(
+            "stack.design.restitution",
+            "missing; the design restitution e in (0, 1] (defaults to contact.restitution)",
+        )
+    m1 = _positive(t["bottom_mass"], "stack.design.bottom_mass", "mass") if "bottom_mass" in t else None
+    mn = _positive(t["top_mass"], "stack.design.top_mass", "mass") if "top_mass" in t else None
+    R = None
+    if "mass_ratio" in t:
+        R = parse_quantity(t["mass_ratio"], "dimensionless", "stack.design.mass_ratio")
+        _check(0 < R < 1, "stack.design.mass_ratio", t["mass_ratio"], "R = m_n/m_1 must be in (0, 1)")
+    given = [k for k in ("bottom_mass", "top_mass", "mass_ratio") if k in t]
+    if kind == "met" and n is not None:
+        if len(given) != 1 or "mass_ratio" in given:
+            raise _error(
+                "stack.design",
+                f"an MET design with n = {n} needs exactly one of bottom_mass, top_mass (got "
+                f"{', '.join(given) or 'none'}); its mass ratios follow from e (Eq 25)",
+            )
+        return DesignSpec(kind, n, e, m1, mn, None)
+    if len(given) != 2:
+        raise _error(
+            "stack.design",
+            f"give two of bottom_mass, top_mass, mass_ratio (got {', '.join(given) or 'none'})",
+        )
+    if R is None:
+        _check(mn < m1, "stack.design.top_mass", t["top_mass"], "must be lighter than bottom_mass")
+        R = mn / m1
+    elif m1 is None:
+        m1 = mn / R
+    else:
+        mn = m1 * R
+    return DesignSpec(kind, n, e, m1, mn, R)
+
+
+def _parse_stack(raw: Any, default_restitution: float | None) -> BodiesSpec:
+    if raw is None:
+        raise _error("stack", "missing section [stack] (masses and gaps)")
+    t = _table(raw, "stack", _STACK_KEYS)
+    if "masses" in t and "design" in t:
+        raise _error(
+            "stack.design",
+            "conflicts with stack.masses; give explicit masses or a design, not both",
+        )
+    masses = design = None
+    if "masses" in t:
+        m = t["masses"]
+        if not isinstance(m, (list, tuple)):
+            raise _error("stack.masses", f"expected a list of masses (bottom first), got {_show(m)}")
+        if len(m) < 2:
+            raise _error(
+                "stack.masses",
+                f"has {len(m)} entr{'y' if len(m) == 1 else 'ies'}; a stack needs at least 2 "
+                "masses",
+            )
+        masses = tuple(_positive(x, f"stack.masses[{i}]", "mass") for i, x in enumerate(m))
+    elif "design" in t:
+        design = _parse_design(t["design"], default_restitution)
+    else:
+        raise _error("stack.masses", "missing; give stack.masses (bottom first) or a [stack.design] section")
+    n = len(masses) if masses is not None else design.n
+
+    if "gaps" not in t:
+        raise _error(
+            "stack.gaps",
+            "missing; the gap between neighbouring masses (0 = touching), one value or a list of "
+            "n-1",
+        )
+    n_gaps = None if n is None else n - 1
+    gaps = _per_item(t["gaps"], "stack.gaps", n_gaps, lambda x, k: _non_negative(x, k, "length"), "gap")
+
+    velocities = None
+    if "velocities" in t:
+        v = t["velocities"]
+        if not isinstance(v, (list, tuple)):
+            raise _error("stack.velocities", f"expected a list of n initial velocities, got {_show(v)}")
+        if n is None:
+            raise _error("stack.velocities", "needs a known number of masses; give stack.design.n")
+        if len(v) != n:
+            raise _error("stack.velocities", f"has {len(v)} entries, expected {n} (one per mass)")
+        velocities = tuple(parse_quantity(x, "velocity", f"stack.velocities[{i}]") for i, x in enumerate(v))
+
+    preload = _bool(t["preload"], "stack.preload") if "preload" in t else False
+    if preload and any(g != 0 for g in (gaps if isinstance(gaps, tuple) else (gaps,))):
+        raise _error("stack.preload", "needs touching masses (stack.gaps = 0)")
+
+    material = _per_item(t["material"], "stack.material", n, _name) if "material" in t else None
+    radius = None
+    if "radius" in t:
+        radius = _per_item(
+            t["radius"], "stack.radius", n, lambda x, k: _positive(x, k, "length", allow_inf=True)
+        )
+    shape = None
+    if "shape" in t:
+        shape = _per_item(t["shape"], "stack.shape", n, lambda x, k: _choice(x, k, SHAPES))
+    shape, radius = _geometry(shape, radius, t, "stack")
+    return BodiesSpec(masses, design, gaps, velocities, preload, material, radius, shape)
+
+
+def _geometry(shape, radius, t: Mapping, path: str):
+    """Reconcile `shape` and `radius` (single values or tuples): flat ⇔ radius inf."""
+    if shape is None and radius is None:
+        return None, None
+    if shape is None:  # derived from the radius
+        def kind(r: float) -> str:
+            return "flat" if math.isinf(r) else "sphere"
+
+        shape = tuple(kind(r) for r in radius) if isinstance(radius, tuple) else kind(radius)
+        return shape, radius
+    shapes = shape if isinstance(shape, tuple) else None
+    if radius is None:
+        if any(s == "sphere" for s in (shapes or (shape,))):
+            raise _error(_join(path, "radius"), "missing; a spherical cap needs its radius of curvature")
+        return shape, (tuple(math.inf for _ in shapes) if shapes else math.inf)
+    if shapes is None and not isinstance(radius, tuple):
+        if shape == "flat" and not math.isinf(radius):
+            raise _error(
+                _join(path, "radius"),
+                f"{_show(t['radius'])} is invalid: a flat face has no radius (omit it or use inf)",
+            )
+        if shape == "sphere" and math.isinf(radius):
+            raise _error(_join(path, "radius"), "inf is invalid: a sphere needs a finite radius")
+        return shape, radius
+    count = len(shapes) if shapes else len(radius)
+    shapes = shapes or (shape,) * count
+    radii = radius if isinstance(radius, tuple) else (radius,) * count
+    out = []
+    for i, (s, r) in enumerate(zip(shapes, radii)):
+        rkey = f"{path}.radius[{i}]" if isinstance(radius, tuple) else f"{path}.radius"
+        if s == "flat":
+            r = math.inf if not isinstance(radius, tuple) else r
+            if not math.isinf(r):
+                raise _error(
+                    rkey,
+                    f"{_show(t['radius'][i])} is invalid: mass {i + 1} is flat ({path}.shape), use "
+                    "inf",
+                )
+        elif math.isinf(r):
+            raise _error(rkey, f"inf is invalid: mass {i + 1} is a sphere and needs a finite radius")
+        out.append(r)
+    return shapes, tuple(out)
+
+
+def _parse_ground(raw: Any) -> GroundSpec:
+    t = _table(raw, "ground", _GROUND_KEYS)
+    material = _name(t["material"], "ground.material") if "material" in t else None
+    shape = _choice(t["shape"], "ground.shape", SHAPES) if "shape" in t else None
+    radius = _positive(t["radius"], "ground.radius", "length", allow_inf=True) if "radius" in t else None
+    if shape is None:
+        shape = "flat" if radius is None or math.isinf(radius) else "sphere"
+    shape, radius = _geometry(shape, radius, t, "ground")
+    return GroundSpec(material, shape, radius)
+
+
+def _parse_solver(raw: Any) -> SolverSpec:
+    t = _table(raw, "solver", _SOLVER_KEYS)
+    solver = _choice(t["solver"], "solver.solver", SOLVERS) if "solver" in t else "tsit5"
+    rtol = atol = t_max = dt_output = None
+    max_steps = n_output = None
+    if "rtol" in t:
+        rtol = parse_quantity(t["rtol"], "dimensionless", "solver.rtol")
+        _check(0 < rtol < 1, "solver.rtol", t["rtol"], "must be in (0, 1)")
+    if "atol" in t:
+        atol = _positive(t["atol"], "solver.atol", "dimensionless")
+    if "t_max" in t:
+        t_max = _positive(t["t_max"], "solver.t_max", "time")
+    if "max_steps" in t:
+        max_steps = _int(t["max_steps"], "solver.max_steps", 1)
+    if "n_output" in t and "dt_output" in t:
+        raise _error("solver.dt_output", "conflicts with solver.n_output; give one of them")
+    if "n_output" in t:
+        n_output = _int(t["n_output"], "solver.n_output", 2)
+    if "dt_output" in t:
+        dt_output = _positive(t["dt_output"], "solver.dt_output", "time")
+    return SolverSpec(solver, rtol, atol, t_max, max_steps, n_output, dt_output)
+
+
+# --------------------------------------------------------------------------------------------------
+# The whole file
+# --------------------------------------------------------------------------------------------------
+
+
+def _build(data: Mapping) -> StackSpec:
+    top = _table(data, "", _TOP_KEYS)
+    title = None
+    if "title" in top:
+        if not isinstance(top["title"], str):
+            raise _error("title", f"{_show(top['title'])} is not a string")
+        title = top["title"]
+    materials = _parse_materials(top["materials"]) if "materials" in top else ()
+    has_ground, drop = _parse_drop(top.get("drop", {}))
+    contacts, overrides = _parse_contact(top.get("contact"), has_ground=has_ground)
+    bodies = _parse_stack(top.get("stack"), contacts.default.restitution)
+    n = bodies.n
+
+    # --- the drop and the initial state
+    gravity = None
+    if "gravity" in drop:
+        gravity = parse_quantity(drop["gravity"], "acceleration", "drop.gravity")
+        _check(
+            gravity >= 0, "drop.gravity", drop["gravity"],
+            "must be >= 0 (the magnitude of the downward gravity)",
+        )
+    impact_velocity = height = None
+    if has_ground:
+        gravity = STANDARD_GRAVITY if gravity is None else gravity
+        given = [k for k in ("impact_velocity", "height") if k in drop]
+        if len(given) == 2:
+            raise _error("drop.height", "conflicts with drop.impact_velocity; give one of them")
+        if given and bodies.velocities is not None:
+            raise _error("stack.velocities", f"conflicts with drop.{given[0]}; give one initial state")
+        if not given and bodies.velocities is None:
+            raise _error(
+                "drop.impact_velocity",
+                "missing; give drop.impact_velocity or drop.height (or stack.velocities)",
+            )
+        if "impact_velocity" in drop:
+            impact_velocity = _non_negative(drop["impact_velocity"], "drop.impact_velocity", "velocity")
+        elif "height" in drop:
+            height = _non_negative(drop["height"], "drop.height", "length")
+            if gravity == 0:
+                raise _error(
+                    "drop.height",
+                    "a drop height needs gravity, but drop.gravity = 0; give drop.impact_velocity "
+                    "instead",
+                )
+            impact_velocity = math.sqrt(2.0 * gravity * height)
+        if "ground" in top:
+            ground = _parse_ground(top["ground"])
+        else:
+            ground = GroundSpec()
+    else:
+        gravity = 0.0 if gravity is None else gravity
+        for k in ("impact_velocity", "height"):
+            if k in drop:
+                raise _error(
+                    f"drop.{k}",
+                    "not used without a ground (drop.ground = false); give stack.velocities",
+                )
+        if "ground" in top:
+            raise _error("ground", "given but drop.ground = false")
+        if bodies.velocities is None:
+            raise _error(
+                "stack.velocities",
+                "missing; a chain without ground (drop.ground = false) needs the initial "
+                "velocities",
+            )
+        ground = None
+    if bodies.preload and gravity == 0:
+        raise _error("stack.preload", "a static preload needs gravity, but drop.gravity = 0")
+
+    # --- interface numbers against the number of masses
+    if n is not None:
+        for j, _, key in overrides:
+            if j > n - 1:
+                raise _error(key, f"{j} is invalid: a stack of {n} masses has interfaces 1..{n - 1}")
+
+    # --- stiffness from materials and geometry where none is given
+    sections = [(contacts.default, "contact")] + [(s, s.source) for _, s, _ in overrides]
+    if ground is not None:
+        sections.append((contacts.ground, contacts.ground.source))
+    for spec, label in sections:
+        if spec.stiffness is not None:
+            continue
+        if bodies.material is None:
+            raise _error(
+                _join(label, "stiffness"),
+                "missing; give a stiffness, or stack.material and stack.radius to compute it",
+            )
+        if bodies.shape is None:
+            raise _error(
+                "stack.radius",
+                f"missing; {label} has no stiffness, so it is computed from materials and the "
+                "caps' radii",
+            )
+    _check_curved(contacts, bodies, ground, overrides, n)
+
+    solver = _parse_solver(top["solver"]) if "solver" in top else SolverSpec()
+    drop_spec = DropSpec(gravity, impact_velocity, height)
+    return StackSpec(drop_spec, bodies, contacts, ground, solver, materials, title)
+
+
+def _check_curved(contacts: ContactsSpec, bodies: BodiesSpec, ground, overrides, n) -> None:
+    """Hertz contact needs at least one curved face: reject flat-on-flat where stiffness is computed."""
+    if bodies.shape is None:
+        return
+    if n is None:  # an 'optimal' design: one shape for all masses
+        if bodies.shape == "flat":
+            for spec in [contacts.default] + [s for _, s, _ in overrides]:
+                if spec.stiffness is None:
+                    raise _error(
+                        _join(spec.source, "stiffness"),
+                        "missing, and the masses are flat (no Hertz stiffness flat on flat); give "
+                        "one or a radius",
+                    )
+        count = 1
+    else:
+        count = n
+    shapes = bodies.shape_list(max(count, 1))
+    computed = ground is not None and contacts.ground.stiffness is None
+    if computed and ground.shape == "flat" and shapes[0] == "flat":
+        raise _error(
+            _join(contacts.ground.source, "stiffness"),
+            "missing, and the flat ground on the flat mass 1 has no Hertz stiffness; give one or "
+            "a radius",
+        )
+    for j in range(1, count):
+        spec = contacts.interface(j)
+        if spec.stiffness is None and shapes[j - 1] == "flat" and shapes[j] == "flat":
+            raise _error(
+                _join(spec.source, "stiffness"),
+                f"missing, and interface {j} is flat on flat (no Hertz stiffness); give one or a "
+                "radius",
+            )
+
+
+def parse_stack(data: Mapping | str, *, source: str | None = None) -> StackSpec:
+    """Validate a stack description — TOML text or an already-parsed `dict` (whose values may also
+    be pint Quantities) — into a `StackSpec`. `source` (a file name) prefixes error messages.
+
+    Raises `StackFileError` (one line, naming the dotted key) on any problem.
+    """
+    prefix = f"{source}: " if source else ""
+    if isinstance(data, str):
+        import tomllib
+
+        try:
+            data = tomllib.loads(data)
+        except tomllib.TOMLDecodeError as exc:
+            err = _error(None, f"{prefix}invalid TOML: {exc}")
+            raise err from None
+    elif not isinstance(data, Mapping):
+        raise _error(None, f"{prefix}expected TOML text or a dict, got {type(data).__name__}")
+    try:
+        spec = _build(data)
+    except StackFileError as exc:
+        if not prefix:
+            raise
+        err = StackFileError(f"{prefix}{exc}")
+        err.key, err.problem = getattr(exc, "key", None), getattr(exc, "problem", str(exc))
+        raise err from None
+    if source is not None:
+        spec = dataclasses.replace(spec, source=source)
+    return spec
+
+
+def load_stack_file(path: str | Path) -> StackSpec:
+    """Read and validate a stack file (TOML with units); see the module docstring for the format."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise _error(None, f"{path}: no such stack file") from None
+    except UnicodeDecodeError:
+        raise _error(None, f"{path}: not a UTF-8 text file") from None
+    except OSError as exc:
+        raise _error(None, f"{path}: cannot read it ({exc.strerror or exc})") from None
+    return parse_stack(text, source=str(path))
