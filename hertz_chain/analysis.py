@@ -201,7 +201,7 @@ def _top_srs(t, a_g, episodes, top_if) -> ShockResponseSpectrum | None:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            return srs(t[keep], a_g[keep], on_coarse="ignore")
+            return srs(t[keep], a_g[keep], on_coarse="ignore", pulse_end=float(t[keep][t[keep] <= t1][-1]))
     except HertzChainError:
         return None
 
