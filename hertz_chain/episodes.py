@@ -49,8 +49,11 @@ class ContactEpisode:
 
     @property
     def restitution(self) -> float:
-        """Effective restitution ``e_eff = separation / approach speed`` (paper Eq 2)."""
-        if not self.complete or self.approach_velocity <= 0:
+        """Effective restitution ``e_eff = separation / approach speed`` (paper Eq 2).
+
+        NaN for an incomplete episode and for one without a real approach (masses that start
+        touching: an approach speed below 1e-6 of the separation speed is round-off)."""
+        if not self.complete or self.approach_velocity <= 1e-6 * abs(self.separation_velocity):
             return float("nan")
         return self.separation_velocity / self.approach_velocity
 
@@ -127,6 +130,8 @@ def contact_episodes(
     *,
     accelerations: np.ndarray | None = None,
     interfaces: list[int] | None = None,
+    free_at_end: bool = False,
+    noise_floor: float = 0.0,
 ) -> list[ContactEpisode]:
     """Find every contact episode of every interface.
 
@@ -140,6 +145,11 @@ def contact_episodes(
       each crossing is extrapolated from the open (free-flight) side as a parabola, which is exact in
       free flight; otherwise the cubic Hermite interpolant across the step is used.
     - `interfaces`: which columns to scan (default all); e.g. ``range(1, n)`` with no ground.
+    - `free_at_end`: the record ends once every contact force has vanished (a clamped contact lets go
+      at ``F = 0`` while ``delta`` is still slightly positive). A contact still overlapping at the last
+      sample is then complete: its end is extrapolated forward in free flight to ``delta = 0``.
+    - `noise_floor`: episodes whose largest overlap does not exceed it (m) are round-off, not contacts,
+      and are dropped (touching masses in float64 overlap by ~1e-24 m).
 
     **Returns** the episodes sorted by start time.
     """
@@ -171,9 +181,18 @@ def contact_episodes(
                 hit = None if accelerations is None else _free_side_crossing(
                     t[k], d[k, j], r[k, j], accelerations[k, j], t[i0])
                 t_start, v_in = hit or _crossing(t[k], t[i0], d[k, j], d[i0, j], r[k, j], r[i0, j])
+            if d[i0 : i1 + 1, j].max() <= noise_floor:
+                continue
+            complete_start = complete
             if i1 == T - 1:
                 t_end, v_out = t[-1], r[-1, j]
                 complete = False
+                if free_at_end and r[-1, j] < 0:
+                    acc = 0.0 if accelerations is None else accelerations[-1, j]
+                    horizon = t[-1] + 1e3 * d[-1, j] / -r[-1, j]
+                    hit = _free_side_crossing(t[-1], d[-1, j], r[-1, j], acc, horizon)
+                    if hit is not None:
+                        (t_end, v_out), complete = hit, complete_start
             else:
                 k = i1 + 1
                 hit = None if accelerations is None else _free_side_crossing(

@@ -1,0 +1,199 @@
+"""From a declarative `StackSpec` (a stack file) to what the simulator needs.
+
+`build(spec)` returns a `Built`: the `Stack` (masses, one calibrated contact law per interface,
+ground, gravity), the initial `State`, the nominal restitution of every interface (for the rigid
+comparison) and the solver options. It resolves, in this order:
+
+1. **Masses**: explicit, or the paper's MVG design (Eq 15, optimal `n` by Eq 20) or MET design
+   (Eq 25) through `hertz_chain.rigid`.
+2. **Stiffness**: given, or Hertz's `k = (4/3) E* sqrt(R*)` from the materials and radii of the two
+   bodies (`hertz_chain.materials`); the ground is rigid unless it has a material.
+3. **Calibration**: each law is calibrated to its interface's restitution with its effective mass
+   `m* = m_j m_{j+1}/(m_j + m_{j+1})` (`m_1` for the ground). Laws whose restitution depends on the
+   impact speed (hunt-crossley, viscoelastic) are calibrated at `calibration_velocity`; when the file
+   leaves it out, at the approach speed that the rigid independent-collision model predicts for that
+   interface (paper Eqs 1–2 applied down the cascade, `rigid.cascade_velocities`), so that the
+   nominal restitution holds where the rigid model expects the impact to happen.
+4. **Initial state**: explicit velocities, a preloaded resting stack dropped at the impact speed
+   (`stack.resting`), or the impact state with the given gaps (`stack.at_impact`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from . import calibration
+from .contact import AbstractContactLaw, make_law
+from .errors import ParameterError, StackFileError
+from .materials import Material, contact_stiffness, material as lookup_material
+from .rigid import cascade_velocities, met_design, met_mass_ratio, mvg_design
+from .simulate import Tolerances
+from .stack import Stack, State, at_impact, resting
+from .stackfile import ContactSpec, StackSpec
+
+__all__ = ["Built", "build", "design_masses"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Built:
+    """A stack file resolved into simulator inputs (SI units).
+
+    `nominal_restitution` `(n,)`: the restitution each interface was specified for (entry 0 = the
+    ground; NaN where a law was given by its raw damping parameter and its restitution is not a
+    constant). `simulate_options`: keyword arguments for `hertz_chain.simulate`.
+    """
+
+    stack: Stack
+    state: State
+    masses: np.ndarray
+    nominal_restitution: np.ndarray
+    laws: tuple[AbstractContactLaw | None, ...]
+    simulate_options: dict
+    n_output: int | None = None
+    dt_output: float | None = None
+    title: str | None = None
+
+
+def design_masses(spec: StackSpec) -> np.ndarray:
+    """Masses (kg, bottom first) of the stack: explicit, or an MVG/MET design (paper Eqs 15, 25)."""
+    bodies = spec.stack
+    if bodies.masses is not None:
+        return np.asarray(bodies.masses, dtype=float)
+    d = bodies.design
+    if d.kind == "mvg":
+        m1 = d.bottom_mass if d.bottom_mass is not None else d.top_mass / d.mass_ratio
+        return np.asarray(mvg_design(d.mass_ratio, d.restitution, n=d.n, m1=m1).masses, dtype=float)
+    if d.n is not None:  # MET with a given n and one mass
+        if d.bottom_mass is not None:
+            m1 = d.bottom_mass
+        else:
+            m1 = d.top_mass / float(met_mass_ratio(d.restitution, d.n))
+        return np.asarray(met_design(1.0, d.restitution, m1=m1, n=d.n).masses, dtype=float)
+    R = d.mass_ratio if d.mass_ratio is not None else d.top_mass / d.bottom_mass
+    m1 = d.bottom_mass if d.bottom_mass is not None else d.top_mass / R
+    return np.asarray(met_design(R, d.restitution, m1=m1).masses, dtype=float)
+
+
+def _material(spec: StackSpec, name: str | None) -> Material | None:
+    if name is None:
+        return None
+    inline = spec.material(name)
+    if inline is not None:
+        return Material(inline.name, inline.youngs_modulus, inline.poisson_ratio, inline.density)
+    return lookup_material(name)
+
+
+def _stiffness(spec: StackSpec, cs: ContactSpec, j: int, n: int) -> float:
+    if cs.stiffness is not None:
+        return cs.stiffness
+    where = f"{cs.source}.stiffness"
+    if cs.law == "kelvin-voigt":
+        raise StackFileError(f"{where}: kelvin-voigt needs an explicit stiffness (N/m); "
+                             "materials give the Hertz stiffness only")
+    mats, radii = spec.stack.material_list(n), spec.stack.radius_list(n)
+    if mats is None or radii is None:
+        raise StackFileError(f"{where}: missing; give a stiffness or stack.material and stack.radius")
+    if j == 0:
+        ground = spec.ground
+        pair = (_material(spec, ground.material), _material(spec, mats[0]))
+        r = (ground.radius, radii[0])
+    else:
+        pair = (_material(spec, mats[j - 1]), _material(spec, mats[j]))
+        r = (radii[j - 1], radii[j])
+    if math.isinf(r[0]) and math.isinf(r[1]):
+        raise StackFileError(f"{where}: interface {j} is flat on flat; Hertz contact needs a curved "
+                             "surface (give a finite stack.radius)")
+    R1, R2 = (r[1], r[0]) if math.isinf(r[0]) else r
+    return contact_stiffness(pair[0], pair[1], R1, None if math.isinf(R2) else R2)
+
+
+def _nominal_e(cs: ContactSpec) -> float:
+    if cs.law == "hertz":
+        return 1.0
+    if cs.restitution is not None:
+        return cs.restitution
+    if cs.law == "tsuji" and cs.damping is not None:
+        return calibration.tsuji_restitution(cs.damping, clamp=cs.clamp)
+    return math.nan  # speed-dependent or given by a raw parameter
+
+
+def _approach_speeds(masses, e, ground: bool, v0) -> np.ndarray:
+    """Rigid-model approach speed of every interface (Eqs 1–2 down the cascade)."""
+    e_fill = np.where(np.isfinite(e), e, 1.0)
+    after_hit, _ = cascade_velocities(masses, e_fill, ground_restitution=e_fill[0] if ground else None,
+                                      velocities=v0)
+    speeds = np.empty(len(masses))
+    speeds[0] = abs(v0[0]) if ground else math.nan
+    # interface j: mass j (struck from below, after_hit[j-1]) approaches mass j+1 (still at v0[j])
+    speeds[1:] = after_hit[:-1] - np.asarray(v0[1:])
+    return speeds
+
+
+def build(spec: StackSpec) -> Built:
+    """Resolve a `StackSpec` into a `Built` (see the module docstring)."""
+    try:
+        return _build(spec)
+    except ParameterError as exc:
+        raise StackFileError(f"{spec.source + ': ' if spec.source else ''}{exc}") from exc
+
+
+def _build(spec: StackSpec) -> Built:
+    m = design_masses(spec)
+    n = m.size
+    ground = spec.has_ground
+    g = spec.drop.gravity
+    interfaces = range(0 if ground else 1, n)
+    for j, _ in spec.contact.overrides:
+        if not 1 <= j <= n - 1:
+            raise StackFileError(f"contact.interface.index: {j} is not an interface of this "
+                                 f"{n}-mass stack (allowed 1..{n - 1})")
+    v0 = np.asarray(spec.initial_velocities(n), dtype=float)
+    specs = {j: spec.contact_for(j) for j in interfaces}
+    e_nom = np.full(n, math.nan)
+    for j, cs in specs.items():
+        e_nom[j] = _nominal_e(cs)
+    speeds = _approach_speeds(m, e_nom, ground, v0)
+    laws: list[AbstractContactLaw | None] = [None] * n
+    for j, cs in specs.items():
+        m_eff = m[0] if j == 0 else m[j - 1] * m[j] / (m[j - 1] + m[j])
+        v_c = cs.calibration_velocity
+        if v_c is None and cs.law in ("hunt-crossley", "viscoelastic") and cs.restitution is not None:
+            v_c = float(speeds[j])
+            if not (np.isfinite(v_c) and v_c > 0):
+                raise StackFileError(f"{cs.source}.calibration_velocity: the rigid model predicts no "
+                                     f"impact at interface {j}; give a calibration_velocity")
+        laws[j] = make_law(
+            cs.law,
+            stiffness=_stiffness(spec, cs, j, n),
+            restitution=cs.restitution,
+            effective_mass=float(m_eff),
+            calibration_velocity=v_c,
+            chi_map=cs.chi_map,
+            alpha=cs.alpha,
+            damping=cs.damping,
+            clamp=cs.clamp,
+        )
+    stack = Stack(m, [laws[j] for j in interfaces], gravity=g, ground=ground)
+    bodies = spec.stack
+    if bodies.velocities is not None:
+        gaps = np.asarray(bodies.gap_list(n), dtype=float)
+        x = np.concatenate([[0.0], np.cumsum(gaps)])
+        state = State(x, v0)
+    elif bodies.preload:
+        v = spec.drop.impact_velocity or 0.0
+        state = resting(stack, height=v**2 / (2 * g))
+    else:
+        state = at_impact(stack, spec.drop.impact_velocity, np.asarray(bodies.gap_list(n), dtype=float))
+    s = spec.solver
+    tol = {k: v for k, v in (("rtol", s.rtol), ("atol", s.atol)) if v is not None}
+    options = {"solver": s.solver, "tolerances": Tolerances(**tol)}
+    if s.t_max is not None:
+        options["t_max"] = s.t_max
+    if s.max_steps is not None:
+        options["max_steps"] = s.max_steps
+    return Built(stack=stack, state=state, masses=m, nominal_restitution=e_nom, laws=tuple(laws),
+                 simulate_options=options, n_output=s.n_output, dt_output=s.dt_output, title=spec.title)
+
