@@ -153,7 +153,7 @@ def _rigid_comparison(sol, e_meas, e_nom, v_ref) -> RigidComparison:
             return float(stack_gain(m, e, ground_restitution=e[0]))
         if not (v0[0] > 0 and np.allclose(v0[1:], 0.0)):
             return None
-        return float(chain_gain(m, e[1:]))
+        return float(chain_gain(m, np.concatenate([[1.0], e[1:]])))  # entry 0 (ground) unused
 
     def safe(fn, label):
         try:
@@ -191,9 +191,9 @@ def _rigid_comparison(sol, e_meas, e_nom, v_ref) -> RigidComparison:
     return RigidComparison(nominal, measured, event, e_nom, e_meas, tuple(notes))
 
 
-def _pulse(t, a) -> PulseMetrics | None:
+def _pulse(t, a, v) -> PulseMetrics | None:
     try:
-        return pulse_metrics(t, a)
+        return pulse_metrics(t, a, velocity=v)
     except HertzChainError:
         return None  # e.g. a mass that never felt a contact
 
@@ -245,7 +245,8 @@ def analyse(solution, *, nominal_restitution=None) -> Report:
     ke0 = 0.5 * float(np.sum(m * v0**2))
     top_eff = 0.5 * m[-1] * launch[-1] ** 2 / ke0 if ke0 > 0 else float("nan")
     a_contact = a + g  # what an accelerometer on each mass reads
-    pulses = tuple(_pulse(st.t, a_contact[:, i]) for i in range(n))
+    v_contact = st.velocities + g * st.t[:, None]  # exact running integral of a + g
+    pulses = tuple(_pulse(st.t, a_contact[:, i], v_contact[:, i]) for i in range(n))
     top_if = {n - 1} | ({n - 2} if n >= 2 and (n - 2 >= 1 or ground) else set())
     top_srs = _top_srs(st.t, a_contact[:, -1] / G0, episodes, top_if)
     ind = independence(episodes, interfaces)

@@ -51,7 +51,7 @@ def design(
         result = report.design_report(ratio=ratio, m1=bottom_mass, mn=top_mass, e=restitution)
     except HertzChainError as exc:
         _fail(str(exc))
-    typer.echo(report.to_json(result) if as_json else report.design_table(result))
+    typer.echo(report.to_json(report.design_dict(result)) if as_json else report.design_table(result))
 
 
 @app.command()

@@ -8,6 +8,11 @@ Conventions (SI units throughout):
 * No adhesion: ``F = 0`` for ``delta <= 0``. By default (``clamp=True``) the force is also clamped to
   ``F >= 0`` so that a damped contact never pulls (the bodies separate where ``F`` reaches zero);
   ``clamp=False`` keeps the raw law.
+* Each class has a ``name`` (the configuration name used in stack files) and a
+  ``restitution_at(impact_velocity, effective_mass=None)`` method that reports the coefficient of
+  restitution of an isolated impact (concrete numbers only; it calls scipy, see
+  `hertz_chain.calibration`). The damped laws have ``from_restitution`` constructors, and
+  `make_law` builds any law by name, as the stack-file reader does.
 * Every field that holds a number is an array leaf (traced), so ``jax.vmap`` and ``jax.grad`` work
   over stiffness, damping and effective mass. ``clamp`` is static.
 
@@ -19,12 +24,17 @@ is ``(force - elastic_force) * delta_dot``.
 from __future__ import annotations
 
 import abc
+import math
+from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike
 
 from . import _config  # noqa: F401  (float64)
+from . import calibration as _cal
+from .errors import ParameterError
 
 __all__ = [
     "AbstractContactLaw",
@@ -33,6 +43,8 @@ __all__ = [
     "Tsuji",
     "KelvinVoigt",
     "Viscoelastic",
+    "LAW_NAMES",
+    "make_law",
 ]
 
 
@@ -51,6 +63,7 @@ class AbstractContactLaw(eqx.Module):
     """A normal contact law ``F(delta, delta_dot)``; see the module docstring for conventions."""
 
     clamp: eqx.AbstractVar[bool]
+    name: ClassVar[str] = ""
 
     @abc.abstractmethod
     def elastic_force(self, delta: ArrayLike) -> Array:
@@ -70,6 +83,15 @@ class AbstractContactLaw(eqx.Module):
         if self.clamp:
             f = jnp.maximum(f, 0.0)
         return f
+
+    def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
+        """Coefficient of restitution of an isolated impact at ``impact_velocity`` (m/s).
+
+        Concrete (non-traced) values only: computed with scipy by `hertz_chain.calibration`.
+        ``effective_mass`` (kg) is needed by the laws whose restitution depends on it.
+        Returns a float, or a NumPy array broadcast over the law's parameters and the velocity.
+        """
+        raise NotImplementedError  # pragma: no cover
 
 
 class _HertzianElastic(AbstractContactLaw):
@@ -92,6 +114,7 @@ class Hertz(_HertzianElastic):
     **Arguments:** ``k``, stiffness in N/m^1.5.
     """
 
+    name: ClassVar[str] = "hertz"
     k: Array
     clamp: bool = eqx.field(static=True, default=True)
 
@@ -99,15 +122,31 @@ class Hertz(_HertzianElastic):
         self.k = jnp.asarray(k, dtype=float)
         self.clamp = clamp
 
+    def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
+        """Always 1 (elastic)."""
+        v = _velocity(impact_velocity)
+        out = np.ones(np.broadcast_shapes(v.shape, np.shape(self.k)))
+        return _scalar(out)
+
 
 class HuntCrossley(_HertzianElastic):
     """Hunt–Crossley hysteretic damping, ``F = k delta^{3/2} (1 + alpha delta_dot)``.
 
     Hunt & Crossley (1975), J. Appl. Mech. 42, 440. ``alpha`` in s/m. With ``alpha`` fixed, the
     restitution falls as the impact velocity rises (``alpha = chi(e) / v_c`` reproduces ``e`` at the
-    calibration velocity ``v_c`` only).
+    calibration velocity ``v_c`` only): ``restitution_at(v)`` gives the exact ``e(chi = alpha v)``
+    (Carvalho & Martins 2019, Mech. Mach. Theory 139, 1; see `hertz_chain.calibration`).
+
+    **The force never becomes tensile** along the isolated-impact trajectory started at
+    ``delta = 0``, ``delta_dot = v > 0``, so the clamp never acts and the exact map holds with and
+    without it. Proof: ``u = 1 + alpha delta_dot`` obeys
+    ``du/dt = alpha delta_ddot = -(alpha k/m) delta^{3/2} u``, hence
+    ``u(t) = (1 + alpha v) exp(-(alpha k/m) ∫_0^t delta^{3/2} ds) > 0`` and
+    ``F = k delta^{3/2} u >= 0`` (checked numerically in ``tests/test_calibration.py``). In a
+    stack, where the interface is also driven by its neighbours, the clamp can still act.
     """
 
+    name: ClassVar[str] = "hunt-crossley"
     k: Array
     alpha: Array
     clamp: bool = eqx.field(static=True, default=True)
@@ -116,6 +155,23 @@ class HuntCrossley(_HertzianElastic):
         self.k = jnp.asarray(k, dtype=float)
         self.alpha = jnp.asarray(alpha, dtype=float)
         self.clamp = clamp
+
+    @classmethod
+    def from_restitution(
+        cls,
+        k: ArrayLike,
+        restitution: float,
+        calibration_velocity: float,
+        chi_map: str = "exact",
+        clamp: bool = True,
+    ) -> "HuntCrossley":
+        """``alpha = chi(e)/v_c`` with ``chi`` from the named map (`calibration.CHI_MAPS`)."""
+        k = _stiffness(k)
+        return cls(k, _cal.hunt_crossley_alpha(restitution, calibration_velocity, chi_map), clamp)
+
+    def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
+        """Exact ``e(chi = alpha v)``; independent of ``k``, ``m*`` and the clamp."""
+        return _cal.hunt_crossley_restitution(np.asarray(self.alpha), _velocity(impact_velocity))
 
     def damping_force(self, delta: ArrayLike, delta_dot: ArrayLike) -> Array:
         return self.elastic_force(delta) * self.alpha * delta_dot
@@ -127,8 +183,14 @@ class Tsuji(_HertzianElastic):
 
     Tsuji, Tanaka & Ishida (1992), Powder Technol. 71, 239. Its restitution does not depend on the
     impact velocity. ``m_eff`` is the effective mass ``m1 m2 / (m1 + m2)`` of the interface (kg).
+
+    Without the clamp, ``eta = -sqrt(5) ln e / sqrt(pi^2 + ln^2 e)`` is exact; with the clamp
+    (default) ``from_restitution`` calibrates ``eta`` numerically. (With ``u = delta^{5/4}`` and a
+    rescaled time the law is exactly the linear spring-dashpot with ``zeta = eta/sqrt(5)``, clamped
+    or not; see `hertz_chain.calibration`.)
     """
 
+    name: ClassVar[str] = "tsuji"
     k: Array
     eta: Array
     m_eff: Array
@@ -140,6 +202,20 @@ class Tsuji(_HertzianElastic):
         self.m_eff = jnp.asarray(m_eff, dtype=float)
         self.clamp = clamp
 
+    @classmethod
+    def from_restitution(
+        cls, k: ArrayLike, restitution: float, m_eff: ArrayLike, clamp: bool = True
+    ) -> "Tsuji":
+        """``eta(e, clamp)`` from `calibration.tsuji_eta` (exact unclamped, numerical clamped)."""
+        k, m = _stiffness(k), _positive(m_eff, "effective_mass")
+        return cls(k, _cal.tsuji_eta(restitution, clamp), m, clamp)
+
+    def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
+        """Restitution for ``eta`` (the same at every impact speed)."""
+        v = _velocity(impact_velocity)
+        eta, _ = np.broadcast_arrays(np.asarray(self.eta, dtype=float), v)
+        return _scalar(np.vectorize(lambda h: _cal.tsuji_restitution(h, self.clamp))(eta))
+
     def damping_force(self, delta: ArrayLike, delta_dot: ArrayLike) -> Array:
         mask, d = _positive_part(delta)
         c = self.eta * jnp.sqrt(self.m_eff * self.k)
@@ -147,8 +223,15 @@ class Tsuji(_HertzianElastic):
 
 
 class KelvinVoigt(AbstractContactLaw):
-    """Linear spring–dashpot, ``F = k delta + c delta_dot`` (k in N/m, c in N s/m)."""
+    """Linear spring–dashpot, ``F = k delta + c delta_dot`` (k in N/m, c in N s/m).
 
+    ``c = 2 zeta sqrt(m_eff k)``. Without the clamp ``zeta = -ln e / sqrt(pi^2 + ln^2 e)`` is exact;
+    with the clamp (default) the bodies separate at ``F = 0`` while ``delta > 0`` and that ``zeta``
+    gives a larger ``e`` (Schwager & Pöschel 2007, Granular Matter 9, 465): ``from_restitution``
+    calibrates ``zeta`` numerically. Its restitution does not depend on the impact velocity.
+    """
+
+    name: ClassVar[str] = "kelvin-voigt"
     k: Array
     c: Array
     clamp: bool = eqx.field(static=True, default=True)
@@ -157,6 +240,23 @@ class KelvinVoigt(AbstractContactLaw):
         self.k = jnp.asarray(k, dtype=float)
         self.c = jnp.asarray(c, dtype=float)
         self.clamp = clamp
+
+    @classmethod
+    def from_restitution(
+        cls, k: ArrayLike, restitution: float, m_eff: ArrayLike, clamp: bool = True
+    ) -> "KelvinVoigt":
+        """``c = 2 zeta(e, clamp) sqrt(m_eff k)`` (`calibration.kelvin_voigt_damping_ratio`)."""
+        k, m = _stiffness(k), _positive(m_eff, "effective_mass")
+        zeta = _cal.kelvin_voigt_damping_ratio(restitution, clamp)
+        return cls(k, 2.0 * zeta * np.sqrt(m * k), clamp)
+
+    def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
+        """Restitution for ``zeta = c / (2 sqrt(m_eff k))`` (the same at every impact speed)."""
+        v = _velocity(impact_velocity)
+        m = _positive(_require(effective_mass, "effective_mass", self.name), "effective_mass")
+        zeta = np.asarray(self.c, dtype=float) / (2.0 * np.sqrt(m * np.asarray(self.k, dtype=float)))
+        zeta, _ = np.broadcast_arrays(zeta, v)
+        return _scalar(np.vectorize(lambda z: _cal.kelvin_voigt_restitution(z, self.clamp))(zeta))
 
     def elastic_force(self, delta: ArrayLike) -> Array:
         mask, d = _positive_part(delta)
@@ -177,9 +277,11 @@ class Viscoelastic(_HertzianElastic):
     Brilliantov, Spahn, Hertzsch & Pöschel (1996), Phys. Rev. E 53, 5382. ``A`` (s) is the
     dissipative material constant; restitution falls with impact velocity as
     ``e = 1 - 1.15344 xi + 0.79826 xi^2 - ...``, ``xi = (3/2) A (k/m_eff)^{2/5} v^{1/5}``
-    (Ramírez et al. 1999).
+    (Ramírez et al. 1999, Phys. Rev. E 60, 4465). The exact ``e(xi, clamp)`` has no closed form: it
+    is computed numerically (`hertz_chain.calibration.viscoelastic_restitution`).
     """
 
+    name: ClassVar[str] = "viscoelastic"
     k: Array
     A: Array
     clamp: bool = eqx.field(static=True, default=True)
@@ -189,6 +291,195 @@ class Viscoelastic(_HertzianElastic):
         self.A = jnp.asarray(A, dtype=float)
         self.clamp = clamp
 
+    @classmethod
+    def from_restitution(
+        cls,
+        k: ArrayLike,
+        restitution: float,
+        m_eff: ArrayLike,
+        calibration_velocity: float,
+        clamp: bool = True,
+    ) -> "Viscoelastic":
+        """``A`` such that the impact at ``calibration_velocity`` has restitution ``e``."""
+        k, m = _stiffness(k), _positive(m_eff, "effective_mass")
+        v = _positive(calibration_velocity, "calibration_velocity")
+        xi = _cal.viscoelastic_xi(restitution, clamp)
+        return cls(k, _cal.viscoelastic_A_from_xi(xi, k, m, v), clamp)
+
+    def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
+        """``e(xi)`` with ``xi = (3/2) A (k/m_eff)^{2/5} v^{1/5}``; falls as ``v`` rises."""
+        v = _velocity(impact_velocity)
+        m = _positive(_require(effective_mass, "effective_mass", self.name), "effective_mass")
+        k = np.asarray(self.k, dtype=float)
+        xi = 1.5 * np.asarray(self.A, dtype=float) * (k / m) ** 0.4 * v**0.2
+        return _scalar(np.vectorize(lambda x: _cal.viscoelastic_restitution(x, self.clamp))(xi))
+
     def damping_force(self, delta: ArrayLike, delta_dot: ArrayLike) -> Array:
         mask, d = _positive_part(delta)
         return jnp.where(mask, 1.5 * self.k * self.A * jnp.sqrt(d) * delta_dot, 0.0)
+
+
+# --------------------------------------------------------------------------------------------------
+# validation helpers (concrete values only) and the factory used by the stack-file reader
+
+LAW_NAMES: tuple[str, ...] = ("hertz", "hunt-crossley", "tsuji", "kelvin-voigt", "viscoelastic")
+"""Configuration names of the contact laws, as used in stack files and by `make_law`."""
+
+_LAW_CLASSES = {
+    "hertz": Hertz,
+    "hunt-crossley": HuntCrossley,
+    "tsuji": Tsuji,
+    "kelvin-voigt": KelvinVoigt,
+    "viscoelastic": Viscoelastic,
+}
+
+
+def _scalar(a):
+    a = np.asarray(a, dtype=float)
+    return float(a) if a.ndim == 0 else a
+
+
+def _positive(value, name: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(name, value, "a finite number > 0") from None
+    if not (math.isfinite(v) and v > 0.0):
+        raise ParameterError(name, value, "a finite number > 0")
+    return v
+
+
+def _nonnegative(value, name: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(name, value, "a finite number >= 0") from None
+    if not (math.isfinite(v) and v >= 0.0):
+        raise ParameterError(name, value, "a finite number >= 0")
+    return v
+
+
+def _stiffness(k) -> float:
+    return _positive(k, "stiffness")
+
+
+def _velocity(v) -> np.ndarray:
+    a = np.asarray(v, dtype=float)
+    if a.size == 0 or np.any(~np.isfinite(a)) or np.any(a <= 0):
+        raise ParameterError("impact_velocity", v, "finite and > 0 (m/s, approach speed)")
+    return a
+
+
+def _require(value, name: str, law: str):
+    if value is None:
+        raise ParameterError(name, None, f"required by the {law!r} law")
+    return value
+
+
+def make_law(
+    name: str,
+    *,
+    stiffness: float,
+    restitution: float | None = None,
+    effective_mass: float | None = None,
+    calibration_velocity: float | None = None,
+    chi_map: str | None = "exact",
+    alpha: float | None = None,
+    eta: float | None = None,
+    damping: float | None = None,
+    A: float | None = None,
+    clamp: bool = True,
+) -> AbstractContactLaw:
+    """Build a contact law from its configuration name (the one factory of the stack-file reader).
+
+    **Arguments** (SI units; all but ``name`` keyword-only):
+
+    - ``name``: one of `LAW_NAMES`: ``"hertz"``, ``"hunt-crossley"``, ``"tsuji"``,
+      ``"kelvin-voigt"``, ``"viscoelastic"``.
+    - ``stiffness``: ``k`` > 0, N/m^1.5 (Hertzian laws) or N/m (``kelvin-voigt``).
+    - Damping, **either** ``restitution`` ``e`` in (0, 1] **or** the law's own parameter:
+
+      | law | own parameter | with ``restitution`` also needs |
+      | --- | --- | --- |
+      | ``hertz`` | none (``restitution`` may only be 1) | — |
+      | ``hunt-crossley`` | ``alpha`` (s/m) | ``calibration_velocity``; ``chi_map`` (default ``"exact"``) |
+      | ``tsuji`` | ``eta`` or ``damping`` (= eta) | ``effective_mass`` (always needed) |
+      | ``kelvin-voigt`` | ``damping`` (= c, N s/m) | ``effective_mass`` |
+      | ``viscoelastic`` | ``A`` or ``damping`` (= A, s) | ``effective_mass``, ``calibration_velocity`` |
+
+      ``e`` is reproduced exactly (to ~1e-11) in the isolated impact, with or without the clamp
+      (see `hertz_chain.calibration`); for ``hunt-crossley`` and ``viscoelastic`` only at the
+      calibration velocity, since their ``e`` falls as the impact speed rises.
+    - ``chi_map``: Hunt–Crossley map name (`calibration.CHI_MAPS`); ``None`` means ``"exact"``.
+    - ``clamp``: clamp the force at ``F >= 0`` (default ``True``).
+
+    ``effective_mass`` and ``calibration_velocity`` are context values and are ignored by laws that do
+    not use them; a law-specific parameter given to another law is an error.
+
+    **Raises** `ParameterError` naming the offending parameter.
+    """
+    if not isinstance(name, str) or name.strip().lower() not in _LAW_CLASSES:
+        raise ParameterError("law", name, f"one of {list(LAW_NAMES)}")
+    law = name.strip().lower()
+    k = _stiffness(stiffness)
+    if not isinstance(clamp, (bool, np.bool_)):
+        raise ParameterError("clamp", clamp, "true or false")
+    clamp = bool(clamp)
+    chi_map = "exact" if chi_map is None else chi_map
+    if chi_map not in _cal.CHI_MAPS:
+        raise ParameterError("chi_map", chi_map, f"one of {sorted(_cal.CHI_MAPS)}")
+    if law != "hunt-crossley" and chi_map != "exact":
+        raise ParameterError("chi_map", chi_map, f"only used by 'hunt-crossley', not by {law!r}")
+
+    # the law's own damping parameter, under any of its accepted keywords
+    own = {"hunt-crossley": ("alpha",), "tsuji": ("eta", "damping"), "kelvin-voigt": ("damping",),
+           "viscoelastic": ("A", "damping"), "hertz": ()}[law]
+    given = {"alpha": alpha, "eta": eta, "damping": damping, "A": A}
+    for key, value in given.items():
+        if value is not None and key not in own:
+            raise ParameterError(key, value, f"not a parameter of the {law!r} law"
+                                 + (f" (it takes {' or '.join(own)})" if own else " (elastic)"))
+    own_given = [(key, given[key]) for key in own if given[key] is not None]
+    if len(own_given) > 1:
+        raise ParameterError(own_given[1][0], own_given[1][1], f"give only one of {' / '.join(own)}")
+    if restitution is not None:
+        e = _cal.check_restitution(restitution)
+        if own_given:
+            raise ParameterError(own_given[0][0], own_given[0][1],
+                                 "give either restitution or the law's own damping parameter, not both")
+    else:
+        e = None
+
+    if law == "hertz":
+        if e is not None and e != 1.0:
+            raise ParameterError("restitution", restitution,
+                                 "'hertz' is elastic (e = 1); use a damped law for e < 1")
+        return Hertz(k, clamp)
+
+    if e is None and not own_given:
+        raise ParameterError("restitution", None,
+                             f"the {law!r} law needs restitution or {' / '.join(own)}")
+    param = None if e is not None else _nonnegative(own_given[0][1], own_given[0][0])
+
+    if law == "hunt-crossley":
+        if e is None:
+            return HuntCrossley(k, param, clamp)
+        v = _positive(_require(calibration_velocity, "calibration_velocity", law), "calibration_velocity")
+        return HuntCrossley.from_restitution(k, e, v, chi_map, clamp)
+
+    if law == "tsuji":
+        m = _positive(_require(effective_mass, "effective_mass", law), "effective_mass")
+        return Tsuji(k, param, m, clamp) if e is None else Tsuji.from_restitution(k, e, m, clamp)
+
+    if law == "kelvin-voigt":
+        if e is None:
+            return KelvinVoigt(k, param, clamp)
+        m = _positive(_require(effective_mass, "effective_mass", law), "effective_mass")
+        return KelvinVoigt.from_restitution(k, e, m, clamp)
+
+    # viscoelastic
+    if e is None:
+        return Viscoelastic(k, param, clamp)
+    m = _positive(_require(effective_mass, "effective_mass", law), "effective_mass")
+    v = _positive(_require(calibration_velocity, "calibration_velocity", law), "calibration_velocity")
+    return Viscoelastic.from_restitution(k, e, m, v, clamp)

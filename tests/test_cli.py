@@ -1,0 +1,109 @@
+"""The hertz-chain command line: output contract, files, and one-line errors with exit status 2.
+
+Expected gains: paper Eq 19 written out here; for the normative example (issue #5: tsuji, e = 0.8,
+1 cm gaps, g = 0) the contacts are sequential, so the simulated gain equals Eq 19.
+"""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from hertz_chain.cli import app
+
+ROOT = Path(__file__).resolve().parents[1]
+NORMATIVE = ROOT / "examples" / "issue5_normative.toml"
+runner = CliRunner()
+
+
+def eq19(m, e):
+    m = np.asarray(m)
+    return (1 + e) * np.prod((1 + e) / (1 + m[1:] / m[:-1])) - 1
+
+
+@pytest.fixture(scope="module")
+def normative_json():
+    res = runner.invoke(app, ["simulate", str(NORMATIVE), "--json"])
+    assert res.exit_code == 0, res.output
+    return json.loads(res.stdout)
+
+
+def test_normative_example_json_contract(normative_json):
+    d = normative_json
+    for key in ("status", "top_velocity_gain", "velocity_gains", "rigid", "contacts", "top_pulse",
+                "energy_error"):
+        assert key in d
+    assert set(d["rigid"]) >= {"nominal_gain", "measured_restitution_gain", "event_driven_gain"}
+    assert set(d["contacts"][0]) >= {"interface", "start_s", "end_s", "restitution", "peak_force_N"}
+    assert set(d["top_pulse"]) >= {"peak_g", "duration_ms", "delta_v_mps", "equivalent_half_sine_ms"}
+    g = eq19([8.4, 3.4683, 1.4320, 0.5913, 0.2441, 0.1008], 0.8)
+    assert d["status"] == "cascade complete"
+    assert d["top_velocity_gain"] == pytest.approx(g, rel=1e-6)
+    assert d["rigid"]["nominal_gain"] == pytest.approx(g, rel=1e-12)
+    assert d["velocity_gains"][-1] == d["top_velocity_gain"]
+    assert d["energy_error"] < 1e-5
+
+
+def test_outputs_and_no_overwrite(tmp_path):
+    import xarray as xr
+
+    nc, png, csv = tmp_path / "r.nc", tmp_path / "r.png", tmp_path / "r.csv"
+    res = runner.invoke(app, ["simulate", str(NORMATIVE), "--output", str(nc), "--plot", str(png)])
+    assert res.exit_code == 0, res.output
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    ds = xr.open_dataset(nc, engine="h5netcdf")
+    assert ds["velocity"].attrs["units"] == "m/s" and ds["time"].attrs["units"] == "s"
+    assert ds.sizes["mass"] == 6
+    ds.close()
+    res = runner.invoke(app, ["simulate", str(NORMATIVE), "--output", str(csv)])
+    assert res.exit_code == 0
+    header = csv.read_text().splitlines()[0]
+    assert header == "time_s,acceleration_mps2,acceleration_g,velocity_mps"
+    before = csv.read_text()
+    res = runner.invoke(app, ["simulate", str(NORMATIVE), "--output", str(csv)])
+    assert res.exit_code == 2 and "--force" in res.output
+    assert csv.read_text() == before  # nothing the user wrote is overwritten without asking
+
+
+BAD = {
+    "broken": "[drop\nimpact_velocity = 1\n",
+    "unknown": NORMATIVE.read_text().replace("rtol = 1e-10", "rtool = 1e-10"),
+    "missing": NORMATIVE.read_text().replace('law = "tsuji"\n', ""),
+    "units": NORMATIVE.read_text().replace('gaps = "1 cm"', 'gaps = "1 kg"'),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_files_give_one_line_and_status_2(tmp_path, case):
+    path = tmp_path / f"{case}.toml"
+    path.write_text(BAD[case])
+    res = runner.invoke(app, ["simulate", str(path)])
+    assert res.exit_code == 2
+    lines = [line for line in res.output.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("hertz-chain: error:")
+    key = {"broken": "line", "unknown": "solver.rtool", "missing": "contact.law", "units": "stack.gaps"}[case]
+    assert key in lines[0]
+
+
+def test_real_process_exit_status_and_no_traceback(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text(BAD["units"])
+    exe = Path(sys.executable).with_name("hertz-chain")
+    proc = subprocess.run([str(exe), "simulate", str(path)], capture_output=True, text=True)
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_design_command():
+    res = runner.invoke(app, ["design", "-R", "0.012", "-e", "0.8", "--json"])
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)
+    assert d["mvg"]["n"] == 6  # paper Fig 17: the optimal MVG stack for R = 0.012, e = 0.8 has 6 masses
+    assert d["mvg"]["gain"] == pytest.approx(5.0407, abs=5e-5)  # references.md, Eq 20
+    assert d["met"]["gain"] == pytest.approx(sum(0.8**k for k in range(1, 11)), rel=1e-12)  # Eq 29, n=10
+    res = runner.invoke(app, ["design", "-R", "1.5", "-e", "0.8"])
+    assert res.exit_code == 2 and "R" in res.output
