@@ -1,17 +1,189 @@
 """hertz_chain: design and simulate shock amplifiers (stacks of progressively lighter masses).
 
-The public API is re-exported here, flat. See README.md for the architecture.
+The public API, re-exported flat. Submodules hold the rest (`hertz_chain.rigid` has every closed form
+of the seed paper, `hertz_chain.calibration` every restitution map, ...). See README.md for the
+architecture and conventions.
 """
 
-from . import _config  # noqa: F401  (float64, compilation cache)
-from .contact import (
-    AbstractContactLaw,
-    Hertz,
-    HuntCrossley,
-    KelvinVoigt,
-    Tsuji,
-    Viscoelastic,
-)
-from .errors import HertzChainError, ParameterError, SolverError, StackFileError
+from __future__ import annotations
+
+import importlib
+import sys
+import types
+from typing import TYPE_CHECKING
+
+# Public name -> the submodule that defines it. Resolved on first use (PEP 562), so that
+# `import hertz_chain` and `hertz-chain --help` do not pay for importing JAX and diffrax.
+_EXPORTS = {
+    "Report": "analysis",
+    "RigidComparison": "analysis",
+    "analyse": "analysis",
+    "independence": "analysis",
+    "Built": "build",
+    "build": "build",
+    "CHI_MAPS": "calibration",
+    "chi_from_restitution": "calibration",
+    "chi_map_table": "calibration",
+    "hunt_crossley_alpha": "calibration",
+    "hunt_crossley_restitution": "calibration",
+    "kelvin_voigt_damping_ratio": "calibration",
+    "tsuji_eta": "calibration",
+    "viscoelastic_restitution": "calibration",
+    "LAW_NAMES": "contact",
+    "AbstractContactLaw": "contact",
+    "Hertz": "contact",
+    "HuntCrossley": "contact",
+    "KelvinVoigt": "contact",
+    "Tsuji": "contact",
+    "Viscoelastic": "contact",
+    "make_law": "contact",
+    "ContactEpisode": "episodes",
+    "contact_episodes": "episodes",
+    "HertzChainError": "errors",
+    "ParameterError": "errors",
+    "SolverError": "errors",
+    "StackFileError": "errors",
+    "Material": "materials",
+    "contact_stiffness": "materials",
+    "effective_mass": "materials",
+    "material": "materials",
+    "material_names": "materials",
+    "G0": "pulse",
+    "PulseMetrics": "pulse",
+    "pulse_metrics": "pulse",
+    "DesignComparison": "rigid",
+    "StackDesign": "rigid",
+    "cascade_velocities": "rigid",
+    "chain_gain": "rigid",
+    "design": "rigid",
+    "energy_efficiencies": "rigid",
+    "impact_velocities": "rigid",
+    "met_design": "rigid",
+    "met_gain": "rigid",
+    "met_masses": "rigid",
+    "mvg_design": "rigid",
+    "mvg_gain": "rigid",
+    "mvg_masses": "rigid",
+    "mvg_optimal_n": "rigid",
+    "mvg_optimal_n_pb": "rigid",
+    "stack_gain": "rigid",
+    "velocity_gains": "rigid",
+    "RigidResult": "rigid_events",
+    "simulate_rigid": "rigid_events",
+    "BatchSolution": "simulate",
+    "Restitution": "simulate",
+    "Solution": "simulate",
+    "Tolerances": "simulate",
+    "Trajectory": "simulate",
+    "launch_velocity": "simulate",
+    "restitution": "simulate",
+    "simulate": "simulate",
+    "simulate_batch": "simulate",
+    "ShockResponseSpectrum": "srs",
+    "octave_frequencies": "srs",
+    "srs": "srs",
+    "STANDARD_GRAVITY": "stack",
+    "Stack": "stack",
+    "State": "stack",
+    "at_impact": "stack",
+    "dropped": "stack",
+    "resting": "stack",
+    "stack_designs": "stack",
+    "StackSpec": "stackfile",
+    "load_stack_file": "stackfile",
+    "parse_stack": "stackfile",
+}
 
 __version__ = "0.1.0"
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'hertz_chain' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))
+
+
+class _Package(types.ModuleType):
+    """Keeps the functions `simulate`, `srs` and `build` from being shadowed by their submodules of
+    the same name when the import system binds a loaded submodule onto the package (as the eager
+    `from .simulate import simulate` of a classic `__init__` would)."""
+
+    def __setattr__(self, name, value):
+        if isinstance(value, types.ModuleType) and _EXPORTS.get(name) == name:
+            value = getattr(value, name)
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
+
+
+if TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
+    from .analysis import Report, RigidComparison, analyse, independence
+    from .build import Built, build
+    from .calibration import (
+        CHI_MAPS,
+        chi_from_restitution,
+        chi_map_table,
+        hunt_crossley_alpha,
+        hunt_crossley_restitution,
+        kelvin_voigt_damping_ratio,
+        tsuji_eta,
+        viscoelastic_restitution,
+    )
+    from .contact import (
+        LAW_NAMES,
+        AbstractContactLaw,
+        Hertz,
+        HuntCrossley,
+        KelvinVoigt,
+        Tsuji,
+        Viscoelastic,
+        make_law,
+    )
+    from .episodes import ContactEpisode, contact_episodes
+    from .errors import HertzChainError, ParameterError, SolverError, StackFileError
+    from .materials import Material, contact_stiffness, effective_mass, material, material_names
+    from .pulse import G0, PulseMetrics, pulse_metrics
+    from .rigid import (
+        DesignComparison,
+        StackDesign,
+        cascade_velocities,
+        chain_gain,
+        design,
+        energy_efficiencies,
+        impact_velocities,
+        met_design,
+        met_gain,
+        met_masses,
+        mvg_design,
+        mvg_gain,
+        mvg_masses,
+        mvg_optimal_n,
+        mvg_optimal_n_pb,
+        stack_gain,
+        velocity_gains,
+    )
+    from .rigid_events import RigidResult, simulate_rigid
+    from .simulate import (
+        BatchSolution,
+        Restitution,
+        Solution,
+        Tolerances,
+        Trajectory,
+        launch_velocity,
+        restitution,
+        simulate,
+        simulate_batch,
+    )
+    from .srs import ShockResponseSpectrum, octave_frequencies, srs
+    from .stack import STANDARD_GRAVITY, Stack, State, at_impact, dropped, resting, stack_designs
+    from .stackfile import StackSpec, load_stack_file, parse_stack
+

@@ -1,0 +1,32 @@
+"""The public API: one flat namespace, resolved lazily so that start-up stays cheap."""
+
+import subprocess
+import sys
+
+import hertz_chain as hc
+
+
+def test_every_public_name_resolves():
+    for name in hc.__all__:
+        assert getattr(hc, name) is not None, name
+
+
+def test_functions_are_not_shadowed_by_their_submodules():
+    import hertz_chain.build  # noqa: F401  (binds the submodule onto the package)
+    import hertz_chain.simulate  # noqa: F401
+    import hertz_chain.srs  # noqa: F401
+
+    assert callable(hc.simulate) and callable(hc.srs) and callable(hc.build)
+
+
+def test_import_and_cli_help_do_not_import_jax():
+    code = ("import sys, hertz_chain, hertz_chain.cli; "
+            "print(any(m == 'jax' or m.startswith('jax.') for m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
+def test_float64_is_on_once_jax_modules_load():
+    import jax.numpy as jnp
+
+    assert hc.Hertz(1e9).k.dtype == jnp.float64
