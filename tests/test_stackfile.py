@@ -461,7 +461,9 @@ def test_horizontal_chain_errors():
 
 
 def test_resting_preloaded_stack():
-    spec = load_stack_file(EXAMPLES / "mvg6_touching.toml")
+    resting = {"stack.preload": True, "stack.gaps": 0, "drop.gravity": DELETE,
+               "solver": {"solver": "dopri8", "dt_output": "1 us"}}
+    spec = parse_stack(patched(resting))
     assert spec.stack.preload and spec.stack.gaps == 0.0 and spec.drop.gravity == G0
     assert spec.stack.masses == pytest.approx((8.4, 3.4683, 1.4320, 0.5913, 0.2441, 0.1008), rel=REL)
     assert close(spec.solver.dt_output, 1e-6) and spec.solver.solver == "dopri8"
@@ -476,7 +478,8 @@ def test_resting_preloaded_stack():
 
 
 def test_solver_settings():
-    s = load_stack_file(EXAMPLES / "mvg6_gapped.toml").solver
+    settings = {"solver": "tsit5", "rtol": 1e-10, "atol": 1e-12, "n_output": 4000, "t_max": "20 ms"}
+    s = parse_stack(patched({"solver": settings})).solver
     assert (s.solver, s.rtol, s.atol, s.n_output, s.dt_output) == ("tsit5", 1e-10, 1e-12, 4000, None)
     assert close(s.t_max, 20e-3)
     s = parse_stack(patched({"solver": {"solver": "kvaerno5", "max_steps": 1000, "t_max": 0.5}})).solver

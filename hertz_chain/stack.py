@@ -1,0 +1,400 @@
+"""The stack as a dynamical system: masses, one contact law per interface, ground, gravity.
+
+A `Stack` is an `eqx.Module` whose numbers (masses, gravity, every contact parameter) are array
+leaves, so `jax.vmap`, `jax.grad` and `eqx.filter_vmap` work over designs. The structure (number of
+masses, law types, presence of the ground) is static: one compiled solver serves every design of one
+structure.
+
+Conventions (`notes/CONVENTIONS.md`): masses numbered from the bottom (index 0 is mass 1), positions
+`x_i` upward with sizes absorbed (`x_1 = 0` when mass 1 touches the ground, `x_{i+1} - x_i` is the
+gap), interface 0 is ground–mass 1, interface `j` is mass `j` – mass `j+1`; the overlap of interface 0
+is `delta_0 = -x_1`, of interface `j` it is `delta_j = x_j - x_{j+1}`; `delta > 0` is compression.
+
+The state vector used by the vector field is flat, in SI units:
+`y = [x_1..x_n, v_1..v_n, D_0..D_{n-1}]`, where `D_j` is the energy dissipated so far by interface `j`
+(J), integrated from `P_j = (F_j - F^el_j) * delta_dot_j >= 0`, so that the energy audit
+`kinetic + gravitational + elastic + dissipated = initial energy` can be checked on every step.
+
+Initial states (`State`): `at_impact` (a), `dropped` (b), `resting` (c), or `State(x, v)` (d).
+All builders are JAX-traceable (they may be vmapped and differentiated with respect to gaps, masses and
+contact parameters).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, ArrayLike
+
+from . import _config  # noqa: F401  (float64)
+from .contact import AbstractContactLaw
+from .errors import ParameterError
+
+__all__ = [
+    "STANDARD_GRAVITY",
+    "Stack",
+    "State",
+    "at_impact",
+    "dropped",
+    "resting",
+    "stack_designs",
+    "invert_monotone",
+]
+
+STANDARD_GRAVITY = 9.80665  # m/s², ISO 80000-3
+MAX_MASSES = 50
+
+
+def _is_concrete(*xs) -> bool:
+    return not any(isinstance(x, jax.core.Tracer) for x in jax.tree.leaves(xs))
+
+
+def _group_laws(laws: Sequence[AbstractContactLaw], interfaces: Sequence[int]):
+    """Group per-interface laws by pytree structure (type and static config) and stack each group."""
+    groups: dict = {}
+    for j, law in zip(interfaces, laws):
+        if not isinstance(law, AbstractContactLaw):
+            raise ParameterError(f"laws[{j}]", law, "an AbstractContactLaw (hertz_chain.contact)")
+        for leaf in jax.tree.leaves(law):
+            if jnp.ndim(leaf) != 0:
+                raise ParameterError(
+                    f"laws[{j}]", law, "per-interface laws with scalar parameters (or one law with "
+                    "parameters of shape (n_interfaces,))"
+                )
+        groups.setdefault(jax.tree.structure(law), []).append((j, law))
+    idx, stacked = [], []
+    for members in groups.values():
+        idx.append(tuple(j for j, _ in members))
+        stacked.append(jax.tree.map(lambda *x: jnp.stack(x), *[law for _, law in members]))
+    return tuple(stacked), tuple(idx)
+
+
+class Stack(eqx.Module):
+    """A stack (or horizontal chain) of `n` point masses joined by compliant contacts.
+
+    **Arguments:**
+
+    - `masses`: `(n,)` masses in kg, numbered from the bottom, `1 <= n <= 50` (`n = 1` needs the ground).
+    - `laws`: the contact law of every interface. Either one law (used for every interface; its
+      parameters are scalars, or arrays of shape `(n_interfaces,)` for one value per interface), or a
+      sequence with one law per interface: length `n` with the ground (entry 0 is ground–mass 1), length
+      `n - 1` without it (interfaces 1..n-1; a leading `None` for interface 0 is also accepted). Laws of
+      different types may be mixed; laws of one type are vectorised together.
+    - `gravity`: gravitational acceleration in m/s² (default standard gravity), `>= 0`; acts downward.
+    - `ground`: whether interface 0 (a rigid, immovable ground at `x = 0`) exists. Without it the stack is
+      the free chain of the paper's Section 3.
+
+    Laws of one type are stored as one vectorised law (`laws[g]` serves the interfaces `groups[g]`), so the
+    vector field costs one call per law type, whatever `n`.
+    """
+
+    masses: Array
+    laws: tuple[AbstractContactLaw, ...]
+    gravity: Array
+    ground: bool = eqx.field(static=True)
+    groups: tuple[tuple[int, ...], ...] = eqx.field(static=True)
+
+    def __init__(
+        self,
+        masses: ArrayLike,
+        laws: AbstractContactLaw | Sequence[AbstractContactLaw | None],
+        *,
+        gravity: ArrayLike = STANDARD_GRAVITY,
+        ground: bool = True,
+    ):
+        masses = jnp.asarray(masses, dtype=float)
+        gravity = jnp.asarray(gravity, dtype=float)
+        if masses.ndim != 1:
+            raise ParameterError("masses", masses, "a 1-D array of masses (kg), bottom first")
+        n = masses.shape[0]
+        if not 1 <= n <= MAX_MASSES:
+            raise ParameterError("len(masses)", n, f"between 1 and {MAX_MASSES} masses")
+        if n == 1 and not ground:
+            raise ParameterError("ground", ground, "True for a single mass (it needs something to hit)")
+        if _is_concrete(masses, gravity):
+            m = np.asarray(masses)
+            if not np.all(np.isfinite(m) & (m > 0)):
+                raise ParameterError("masses", m.tolist(), "finite and > 0 (kg)")
+            g = float(gravity)
+            if not (np.isfinite(g) and g >= 0):
+                raise ParameterError("gravity", g, "finite and >= 0 (m/s², acting downward)")
+        interfaces = list(range(0 if ground else 1, n))
+        if isinstance(laws, AbstractContactLaw):
+            shapes = {jnp.shape(leaf) for leaf in jax.tree.leaves(laws)}
+            if shapes <= {()}:
+                laws = jax.tree.map(lambda a: jnp.broadcast_to(a, (len(interfaces),)), laws)
+            elif shapes != {(len(interfaces),)}:
+                raise ParameterError(
+                    "laws", laws, f"scalar parameters or parameters of shape ({len(interfaces)},)"
+                )
+            stacked, groups = (laws,), (tuple(interfaces),)
+        else:
+            laws = list(laws)
+            if not ground and len(laws) == n and laws and laws[0] is None:
+                laws = laws[1:]
+            if len(laws) != len(interfaces):
+                raise ParameterError(
+                    "laws", f"{len(laws)} laws", f"one law per interface: {len(interfaces)} for n = {n}"
+                    f" {'with' if ground else 'without'} the ground"
+                )
+            stacked, groups = _group_laws(laws, interfaces)
+        self.masses = masses
+        self.laws = stacked
+        self.gravity = gravity
+        self.ground = bool(ground)
+        self.groups = groups
+
+    # ---------------------------------------------------------------- structure
+    @property
+    def n(self) -> int:
+        """Number of masses."""
+        return self.masses.shape[-1]
+
+    @property
+    def interfaces(self) -> tuple[int, ...]:
+        """The interfaces that exist (0..n-1 with the ground, 1..n-1 without)."""
+        return tuple(range(0 if self.ground else 1, self.n))
+
+    def effective_masses(self) -> Array:
+        """`(n,)` reduced mass of every interface: `m_1` for the ground, `m_j m_{j+1}/(m_j + m_{j+1})`."""
+        m = self.masses
+        pair = m[:-1] * m[1:] / (m[:-1] + m[1:])
+        return jnp.concatenate([m[:1], pair])
+
+    def interface_mask(self) -> Array:
+        """`(n,)` booleans: which interfaces exist (entry 0 is False without the ground)."""
+        return jnp.asarray([self.ground] + [True] * (self.n - 1))
+
+    def law_of(self, j: int) -> AbstractContactLaw:
+        """The (scalar) contact law of interface `j`."""
+        for idx, law in zip(self.groups, self.laws):
+            if j in idx:
+                k = idx.index(j)
+                return jax.tree.map(lambda a: a[k], law)
+        raise ParameterError("interface", j, f"one of {self.interfaces}")
+
+    # ---------------------------------------------------------------- per-interface evaluation
+    def _map_laws(self, fn, *args: Array) -> Array:
+        """Apply `fn(law, *args_of_its_interfaces)` group-wise; zero on missing interfaces."""
+        n = self.n
+        out = jnp.zeros(jnp.shape(args[0]), dtype=float)
+        for idx, law in zip(self.groups, self.laws):
+            if idx == tuple(range(n)):
+                return fn(law, *args)
+            start, stop = idx[0], idx[-1] + 1
+            if idx == tuple(range(start, stop)):  # contiguous: a slice
+                out = out.at[..., start:stop].set(fn(law, *(a[..., start:stop] for a in args)))
+            else:
+                ia = np.asarray(idx)
+                out = out.at[..., ia].set(fn(law, *(a[..., ia] for a in args)))
+        return out
+
+    def overlaps(self, x: Array) -> Array:
+        """`(..., n)` overlaps `delta` of every interface from positions (entry 0 is 0 without ground)."""
+        d0 = -x[..., :1] if self.ground else jnp.zeros_like(x[..., :1])
+        return jnp.concatenate([d0, x[..., :-1] - x[..., 1:]], axis=-1)
+
+    def overlap_rates(self, v: Array) -> Array:
+        """`(..., n)` overlap rates `delta_dot` (> 0 while approaching)."""
+        return self.overlaps(v)
+
+    def forces(self, delta: Array, delta_dot: Array) -> Array:
+        """`(..., n)` contact force of every interface (N, >= 0 pushes apart)."""
+        return self._map_laws(lambda law, d, dd: law.force(d, dd), delta, delta_dot)
+
+    def elastic_forces(self, delta: Array) -> Array:
+        """`(..., n)` conservative part of every contact force (N)."""
+        return self._map_laws(lambda law, d: law.elastic_force(d), delta)
+
+    def unclamped_forces(self, delta: Array, delta_dot: Array) -> Array:
+        """`(..., n)` `elastic_force + damping_force`, without the no-tension clamp (N)."""
+        return self._map_laws(
+            lambda law, d, dd: law.elastic_force(d) + law.damping_force(d, dd), delta, delta_dot
+        )
+
+    def potentials(self, delta: Array) -> Array:
+        """`(..., n)` elastic energy stored in every contact (J)."""
+        return self._map_laws(lambda law, d: law.potential(d), delta)
+
+    def separation_function(self, delta: Array, delta_dot: Array) -> Array:
+        """`(..., n)` a function that is `> 0` exactly while a contact pushes, `<= 0` once it is open.
+
+        `G = (F^el + F^damp) delta / F^el` for `delta > 0` (the unclamped force over the secant
+        stiffness: a length, smooth through the force zero; `G = delta` for an elastic law), and
+        `G = delta` otherwise. With the no-tension clamp the bodies separate at `G = 0` (force zero),
+        possibly at `delta > 0`. Used to locate the end of contacts.
+        """
+        el = self.elastic_forces(delta)
+        fu = self.unclamped_forces(delta, delta_dot)
+        ok = (delta > 0) & (el > 0)
+        return jnp.where(ok, fu * delta / jnp.where(ok, el, 1.0), delta)
+
+    def accelerations(self, forces: Array) -> Array:
+        """`(..., n)` accelerations of the masses (m/s², upward) from the interface forces."""
+        above = jnp.concatenate([forces[..., 1:], jnp.zeros_like(forces[..., :1])], axis=-1)
+        return (forces - above) / self.masses - self.gravity
+
+    # ---------------------------------------------------------------- dynamics
+    def split(self, y: Array) -> tuple[Array, Array, Array]:
+        """Split a flat state `(..., 3n)` into positions, velocities and dissipated energies."""
+        n = self.n
+        return y[..., :n], y[..., n : 2 * n], y[..., 2 * n :]
+
+    def vector_field(self, t, y: Array, args=None) -> Array:
+        """`dy/dt` of the flat SI state `y = [x, v, D]` (diffrax signature `(t, y, args)`).
+
+        `dx/dt = v`; `m_i dv_i/dt = F_{i-1,i} - F_{i,i+1} - m_i g` (Newton); `dD_j/dt = (F_j -
+        F^el_j) delta_dot_j`, the power dissipated by the damping part of interface `j` (with the
+        no-tension clamp, `F_j = 0` while `F^el_j > 0` on separation, which also dissipates).
+        """
+        x, v, _ = self.split(y)
+        d, dd = self.overlaps(x), self.overlap_rates(v)
+        f = self.forces(d, dd)
+        p = (f - self.elastic_forces(d)) * dd
+        return jnp.concatenate([v, self.accelerations(f), p], axis=-1)
+
+    def energies(self, y: Array) -> dict[str, Array]:
+        """Kinetic, gravitational (zero at `x = 0`), elastic and dissipated energy (J) of a state."""
+        x, v, diss = self.split(y)
+        return dict(
+            kinetic=0.5 * jnp.sum(self.masses * v**2, axis=-1),
+            gravitational=self.gravity * jnp.sum(self.masses * x, axis=-1),
+            elastic=jnp.sum(self.potentials(self.overlaps(x)), axis=-1),
+            dissipated=jnp.sum(diss, axis=-1),
+        )
+
+    def total_energy(self, y: Array) -> Array:
+        """Sum of the four energies of `energies` (J): constant along an exact trajectory."""
+        return sum(self.energies(y).values())
+
+
+def stack_designs(stacks: Sequence[Stack]) -> Stack:
+    """Stack a list of designs of one structure into one batched `Stack` (leading axis = design)."""
+    stacks = list(stacks)
+    structs = {jax.tree.structure(s) for s in stacks}
+    if len(structs) != 1:
+        raise ParameterError("stacks", f"{len(structs)} structures", "designs of one structure "
+                             "(same n, law types, ground)")
+    return jax.tree.map(lambda *x: jnp.stack(x), *stacks)
+
+
+# ==================================================================== initial states
+class State(eqx.Module):
+    """Positions (m, upward) and velocities (m/s, upward) of every mass: initial state (d)."""
+
+    positions: Array
+    velocities: Array
+
+    def __init__(self, positions: ArrayLike, velocities: ArrayLike):
+        self.positions = jnp.asarray(positions, dtype=float)
+        self.velocities = jnp.asarray(velocities, dtype=float)
+        if self.positions.shape != self.velocities.shape or self.positions.ndim < 1:
+            raise ParameterError("velocities", self.velocities.shape,
+                                 f"the shape of positions {self.positions.shape}")
+
+    def flat(self) -> Array:
+        """The flat SI state `[x, v, D = 0]` used by `Stack.vector_field`."""
+        x, v = self.positions, self.velocities
+        return jnp.concatenate([x, v, jnp.zeros_like(x)], axis=-1)
+
+
+def _gaps(stack: Stack, gaps) -> Array:
+    n = stack.n
+    if gaps is None:
+        return jnp.zeros(n - 1)
+    g = jnp.asarray(gaps, dtype=float)
+    if g.ndim == 0:
+        g = jnp.broadcast_to(g, (n - 1,))
+    if g.shape != (n - 1,):
+        raise ParameterError("gaps", tuple(g.shape), f"a scalar or shape ({n - 1},): the gap between "
+                             "mass j and j+1 (m)")
+    if _is_concrete(g) and not np.all(np.asarray(g) >= 0):
+        raise ParameterError("gaps", np.asarray(g).tolist(), ">= 0 (m)")
+    return g
+
+
+def at_impact(stack: Stack, velocity: ArrayLike, gaps: ArrayLike | None = None) -> State:
+    """Initial state (a): mass 1 just touches the ground, every mass moves down at `velocity`.
+
+    **Arguments:** `velocity` is the drop (free-fall) speed `v_ff > 0` (m/s); `gaps` (m), a scalar or
+    `(n-1,)`, the gap between the surfaces of masses `j` and `j+1` (default 0: touching, unloaded).
+    Paper Section 4: "initially all the masses are approaching the ground with the same free-fall
+    velocity `v_ff`".
+    """
+    v = jnp.asarray(velocity, dtype=float)
+    if _is_concrete(v) and not (np.isfinite(float(v)) and float(v) >= 0):
+        raise ParameterError("velocity", float(v), "a finite drop speed >= 0 (m/s, downward)")
+    g = _gaps(stack, gaps)
+    x = jnp.concatenate([jnp.zeros(1), jnp.cumsum(g)])
+    return State(x, jnp.broadcast_to(-v, x.shape))
+
+
+def dropped(stack: Stack, height: ArrayLike, gaps: ArrayLike | None = None) -> State:
+    """Initial state (b): dropped from rest at `height` (m) with rigid gaps: `at_impact` with
+    `v_ff = sqrt(2 g h)` (free fall, the gaps unchanged since every mass falls alike)."""
+    h = jnp.asarray(height, dtype=float)
+    if _is_concrete(h, stack.gravity):
+        if not (np.isfinite(float(h)) and float(h) >= 0):
+            raise ParameterError("height", float(h), "finite and >= 0 (m)")
+        if float(h) > 0 and float(stack.gravity) <= 0:
+            raise ParameterError("gravity", float(stack.gravity), "> 0 to drop a stack from a height")
+    return at_impact(stack, jnp.sqrt(2.0 * stack.gravity * h), gaps)
+
+
+def invert_monotone(fn, target: Array, iterations: int = 40) -> Array:
+    """Solve `fn(d) = target` elementwise for `d > 0`, `fn` increasing and positive (`target > 0`).
+
+    Newton's method on `log fn(exp(u)) = log target`, which is linear for every power law (`k d^p`:
+    exact after one step) and well conditioned for the others; a fixed number of iterations, so it is
+    traceable, vmappable and differentiable (its derivative converges with it).
+    """
+    target = jnp.asarray(target, dtype=float)
+    log_t = jnp.log(target)
+
+    def residual(u):
+        return jnp.log(fn(jnp.exp(u))) - log_t
+
+    def body(_, u):
+        r, dr = jax.jvp(residual, (u,), (jnp.ones_like(u),))
+        step = jnp.clip(r / jnp.where(jnp.abs(dr) > 1e-300, dr, 1.0), -5.0, 5.0)
+        return jnp.where(jnp.isfinite(step), u - step, u)
+
+    u = jax.lax.fori_loop(0, iterations, body, jnp.zeros_like(target))
+    return jnp.exp(u)
+
+
+def resting(stack: Stack, height: ArrayLike = 0.0) -> State:
+    """Initial state (c): a touching stack (zero gaps) in static equilibrium under gravity.
+
+    Interface `j` carries the weight of the masses above it, `W_j = g sum_{i > j} m_i`, so its preload
+    overlap solves `F^el_j(delta_j) = W_j` (Hertz: `delta_j = (W_j/k)^{2/3}`), found by `invert_monotone`
+    for any law.
+
+    - `height = 0`: the stack rests on the ground; the ground contact carries the whole weight
+      (`x_1 = -delta_0`), every mass is at rest and the net force on every mass is zero.
+    - `height > 0`: the preloaded stack is dropped from `height` with its preload kept (the usual
+      idealisation of a stack held together by its guides): mass 1 just touches the ground
+      (`x_1 = 0`) and every mass moves down at `sqrt(2 g h)`.
+
+    Without the ground only `height = 0` makes sense and interface 0 carries nothing.
+    """
+    h = jnp.asarray(height, dtype=float)
+    if _is_concrete(h) and not (np.isfinite(float(h)) and float(h) >= 0):
+        raise ParameterError("height", float(h), "finite and >= 0 (m)")
+    m, g = stack.masses, stack.gravity
+    above = jnp.cumsum(m[::-1])[::-1]  # above[i] = sum_{k >= i} m_k
+    weight = g * above  # interface j (index j) carries the masses j+1..n (indices j..n-1)
+    mask = (weight > 0) & stack.interface_mask()
+    w_safe = jnp.where(mask, weight, 1.0)
+    # masked entries solve d = 1 instead (finite values and gradients: the double-where trick)
+    fn = lambda d: jnp.where(mask, stack.elastic_forces(d), d)  # noqa: E731
+    delta = jnp.where(mask, invert_monotone(fn, w_safe), 0.0)
+    on_ground = h <= 0
+    x1 = jnp.where(on_ground, -delta[0], 0.0)
+    x = x1 - jnp.concatenate([jnp.zeros(1), jnp.cumsum(delta[1:])])
+    v_ff = jnp.sqrt(2.0 * g * jnp.maximum(h, 0.0))
+    return State(x, jnp.broadcast_to(-v_ff, x.shape))
