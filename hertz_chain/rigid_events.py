@@ -33,6 +33,9 @@ ground–mass 1, interface `j` = mass `j` – mass `j+1` (array indices `j−1`,
 * *Limits.* Reaching `max_collisions` impacts, or a next impact later than `t_max`, before the system
   separates raises `SolverError` (inelastic collapse has infinitely many impacts in finite time). The
   error carries the run so far as `error.result` (a `RigidResult`), so launch velocities stay readable.
+  A collapsing clump without gravity (e.g. three bodies in a line with `e < 7 − 4√3`, McNamara & Young
+  1992) ends normally once its relative speeds fall below the approach floor: it then moves as one body
+  at its centre-of-mass velocity.
 
 **Gravity.** The paper neglects gravity during the impacts (Section 2). With `gravity > 0` and a
 ground, the slow lower masses of a dropped stack usually fall back onto each other and onto the
