@@ -48,7 +48,7 @@ _EXPORTS = {
     "effective_mass": "materials",
     "material": "materials",
     "material_names": "materials",
-    "G0": "pulse",
+    "G0": "constants",
     "PulseMetrics": "pulse",
     "pulse_metrics": "pulse",
     "DesignComparison": "rigid",
@@ -82,7 +82,7 @@ _EXPORTS = {
     "ShockResponseSpectrum": "srs",
     "octave_frequencies": "srs",
     "srs": "srs",
-    "STANDARD_GRAVITY": "stack",
+    "STANDARD_GRAVITY": "constants",
     "Stack": "stack",
     "State": "stack",
     "at_impact": "stack",
@@ -151,7 +151,8 @@ if TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
     from .episodes import ContactEpisode, contact_episodes
     from .errors import HertzChainError, ParameterError, SolverError, StackFileError
     from .materials import Material, contact_stiffness, effective_mass, material, material_names
-    from .pulse import G0, PulseMetrics, pulse_metrics
+    from .constants import G0, STANDARD_GRAVITY
+    from .pulse import PulseMetrics, pulse_metrics
     from .rigid import (
         DesignComparison,
         StackDesign,
@@ -184,6 +185,6 @@ if TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
         simulate_batch,
     )
     from .srs import ShockResponseSpectrum, octave_frequencies, srs
-    from .stack import STANDARD_GRAVITY, Stack, State, at_impact, dropped, resting, stack_designs
+    from .stack import Stack, State, at_impact, dropped, resting, stack_designs
     from .stackfile import StackSpec, load_stack_file, parse_stack
 

@@ -7,7 +7,8 @@ r"""Materials, contact geometry and Hertz stiffness (plain Python/NumPy, SI unit
 * Hertz stiffness $k = \tfrac43 E^*\sqrt{R^*}$ (N/m^1.5), so $F = k\delta^{3/2}$ (Johnson 1985, Eq. 4.23).
 * Masses from geometry and density: sphere $\tfrac43\pi r^3\rho$, cylinder/disc $\pi r^2 h\rho$.
 
-The material table `data/materials.csv` (at the repository root) has columns ``name,
+The material table `hertz_chain/data/materials.csv` (shipped in the wheel; `data/materials.csv` at the
+repository root links to it) has columns ``name,
 youngs_modulus_Pa, poisson_ratio, density_kg_m3, typical_restitution, source``; every row names
 its handbook/datasheet source. The restitution column is **indicative** only (the coefficient of
 restitution is not a material constant: it depends on speed, size and the partner).
@@ -39,7 +40,7 @@ __all__ = [
     "disc_mass",
 ]
 
-MATERIALS_CSV = Path(__file__).resolve().parents[1] / "data" / "materials.csv"
+MATERIALS_CSV = Path(__file__).resolve().parent / "data" / "materials.csv"
 
 
 def _number(value, name: str) -> float:

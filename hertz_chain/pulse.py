@@ -43,12 +43,11 @@ import dataclasses
 
 import numpy as np
 
+from .constants import G0
 from .errors import ParameterError
 
 __all__ = ["G0", "PulseMetrics", "pulse_metrics", "to_g", "from_g", "count_pulses"]
 
-#: Standard acceleration of gravity, m/s² (CGPM 1901; ISO 80000-3).
-G0 = 9.80665
 
 
 def to_g(a):

@@ -32,6 +32,7 @@ from jaxtyping import Array, ArrayLike
 
 from . import _config  # noqa: F401  (float64)
 from .contact import AbstractContactLaw
+from .constants import STANDARD_GRAVITY
 from .errors import ParameterError
 
 __all__ = [
@@ -45,7 +46,6 @@ __all__ = [
     "invert_monotone",
 ]
 
-STANDARD_GRAVITY = 9.80665  # m/s², ISO 80000-3
 MAX_MASSES = 50
 
 

@@ -252,6 +252,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any, Mapping
 
+from .constants import STANDARD_GRAVITY
 from .errors import StackFileError
 
 __all__ = [
@@ -275,7 +276,6 @@ __all__ = [
     "parse_quantity",
 ]
 
-STANDARD_GRAVITY = 9.80665  # m/s^2, standard acceleration of gravity (3rd CGPM, 1901)
 
 CONTACT_LAWS = ("hertz", "hunt-crossley", "tsuji", "kelvin-voigt", "viscoelastic")
 CHI_MAPS = (
