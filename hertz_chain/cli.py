@@ -38,9 +38,9 @@ def _fail(message: str) -> None:
 
 @app.command()
 def design(
-    ratio: Optional[float] = typer.Option(None, "--ratio", "-R", help="R = m_n / m_1 (0 < R < 1)."),
-    bottom_mass: Optional[float] = typer.Option(None, "--m1", help="Bottom mass m_1 in kg."),
-    top_mass: Optional[float] = typer.Option(None, "--mn", help="Top mass m_n in kg."),
+    ratio: Optional[float] = typer.Option(None, "--mass-ratio", "--ratio", "-R", help="R = m_n / m_1 (0 < R < 1)."),
+    bottom_mass: Optional[float] = typer.Option(None, "--bottom-mass", "--m1", help="Bottom mass m_1 in kg (scales the design)."),
+    top_mass: Optional[float] = typer.Option(None, "--top-mass", "--mn", help="Top mass m_n in kg (with --bottom-mass, instead of R)."),
     restitution: float = typer.Option(..., "--restitution", "-e", help="Restitution e of every impact."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
 ) -> None:

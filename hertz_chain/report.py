@@ -255,36 +255,51 @@ def write_output(report: Report, path: str | Path) -> None:
 
 # ------------------------------------------------------------------------------------------ design
 def design_report(*, ratio=None, m1=None, mn=None, e):
-    """The paper's optimal MVG and MET designs for (R, e) or (m_1, m_n, e) (`rigid.design`)."""
+    """The paper's optimal MVG and MET designs for (R, e), (R, m_1, e) or (m_1, m_n, e) (`rigid.design`)."""
     from .errors import ParameterError
     from .rigid import design
 
     if ratio is None and (m1 is None or mn is None):
-        raise ParameterError("ratio", ratio, "give --ratio R, or both --m1 and --mn")
-    if ratio is not None:
-        return design(R=ratio, e=e)
-    return design(m1=m1, mn=mn, e=e)
+        raise ParameterError("mass-ratio", ratio, "give --mass-ratio R, or both --bottom-mass and --top-mass")
+    return design(R=ratio, m1=m1, mn=mn, e=e)
 
 
 def _design_dict(d) -> dict:
-    return {"kind": d.kind, "n": d.n, "masses": list(map(float, d.masses)), "gain": d.gain,
-            "efficiency": d.efficiency, "total_mass": d.total_mass}
+    return {"kind": d.kind, "n": d.n, "masses": list(map(float, d.masses)),
+            "mass_ratios": list(map(float, d.ratios)), "velocity_gain": float(d.gain),
+            "energy_efficiency": float(d.efficiency), "total_mass": float(d.total_mass)}
 
 
 def design_dict(cmp) -> dict:
-    return {"mvg": _design_dict(cmp.mvg), "met": _design_dict(cmp.met),
-            "mvg_over_met": {"gain": cmp.gain_ratio, "efficiency": cmp.efficiency_ratio,
+    """JSON-ready design comparison: `mvg`, `met` (each `n`, `masses`, `velocity_gain`,
+    `energy_efficiency`, `total_mass`) and `mvg_over_met` (the ratios of Figs 13–15 and 18)."""
+    return {"mass_ratio": cmp.R, "restitution": cmp.mvg.restitution,
+            "mass_unit": "kg" if cmp.mvg.masses[0] != 1.0 else "m1",
+            "mvg": _design_dict(cmp.mvg), "met": _design_dict(cmp.met),
+            "mvg_over_met": {"velocity_gain": cmp.gain_ratio, "energy_efficiency": cmp.efficiency_ratio,
                              "total_mass": cmp.mass_ratio}}
 
 
 def design_table(cmp) -> str:
-    lines = []
-    for d in (cmp.mvg, cmp.met):
-        lines.append(f"{d.kind}: n = {d.n}, gain G = {d.gain:.4f}, K = {d.efficiency:.4f}, "
-                     f"total mass M = {d.total_mass:.4g}")
-        lines.append("  masses: " + ", ".join(f"{m:.4g}" for m in d.masses))
-    lines.append(f"MVG/MET: gain {cmp.gain_ratio:.4f}, efficiency {cmp.efficiency_ratio:.4f}, "
-                 f"total mass {cmp.mass_ratio:.4f}  (paper Figs 13-15, 18)")
+    """The two designs side by side, masses bottom first, and their MVG/MET ratios."""
+    mvg, met = cmp.mvg, cmp.met
+    unit = "kg" if mvg.masses[0] != 1.0 else "m_1"
+    rows = [("number of masses n", f"{mvg.n:d}", f"{met.n:d}", "—"),
+            ("velocity gain G = V_n/v_ff", f"{mvg.gain:.4f}", f"{met.gain:.4f}", f"{cmp.gain_ratio:.4f}"),
+            ("energy efficiency K_n", f"{mvg.efficiency:.4f}", f"{met.efficiency:.4f}",
+             f"{cmp.efficiency_ratio:.4f}"),
+            (f"total mass M [{unit}]", f"{mvg.total_mass:.4g}", f"{met.total_mass:.4g}", f"{cmp.mass_ratio:.4f}"),
+            ("mass ratio m_n/m_1", f"{mvg.mass_ratio:.4g}", f"{met.mass_ratio:.4g}", "—")]
+    w = [max(len(r[i]) for r in rows + [("", "MVG (Eq 15)", "MET (Eq 25)", "MVG/MET")]) for i in range(4)]
+    head = ("", "MVG (Eq 15)", "MET (Eq 25)", "MVG/MET")
+    fmt = lambda r: f"{r[0]:<{w[0]}}  {r[1]:>{w[1]}}  {r[2]:>{w[2]}}  {r[3]:>{w[3]}}"
+    lines = [f"Optimal stacks for R = {cmp.R:.6g}, e = {mvg.restitution:.6g} (seed paper Section 5)", "",
+             fmt(head), "-" * (sum(w) + 6), *map(fmt, rows), "",
+             f"masses [{unit}], bottom first:",
+             "  MVG: " + ", ".join(f"{m:.5g}" for m in mvg.masses),
+             "  MET: " + ", ".join(f"{m:.5g}" for m in met.masses),
+             "",
+             "MVG/MET ratios are the quantities of the paper's Figs 13 (G), 14 (K) and 15/18 (M)."]
     return "\n".join(lines)
 
 

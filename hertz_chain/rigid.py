@@ -703,9 +703,9 @@ def met_design(R: float, e: float, m1: float = 1.0, n: int | None = None) -> Sta
 def design(*, e: float, R: float | None = None, m1: float | None = None, mn: float | None = None) -> DesignComparison:
     """One-call design (Section 5): optimal MVG stack and MET stack, and their comparison.
 
-    Give either `R = m_n/m_1` (masses then in units of `m_1`) or both `m1` and `mn` (kg), and `e` in
-    `(0, 1)`. Example: `design(R=0.012, e=0.8)` gives the six-mass MVG (`G = 5.04`) and the ten-mass
-    MET (`G = 3.57`) of Figs 16–17.
+    Give either `R = m_n/m_1` (with an optional bottom mass `m1` in kg; masses are in units of `m_1`
+    without it) or both `m1` and `mn` (kg), and `e` in `(0, 1)`. Example: `design(R=0.012, e=0.8)`
+    gives the six-mass MVG (`G = 5.04`) and the ten-mass MET (`G = 3.57`) of Figs 16–17.
     """
     if R is None:
         if m1 is None or mn is None:
@@ -715,9 +715,9 @@ def design(*, e: float, R: float | None = None, m1: float | None = None, mn: flo
         if not R < 1:
             raise ParameterError("mn", mnf, f"the top mass must be lighter than m1 = {m1f!r}")
     else:
-        if m1 is not None or mn is not None:
-            raise ParameterError("R", R, "give R, or m1 and mn, not both")
-        m1f = 1.0
+        if mn is not None:
+            raise ParameterError("mn", mn, "give R or the top mass mn, not both")
+        m1f = 1.0 if m1 is None else float(_check_positive(m1, "m1"))
     R = float(_check_R(R))
     e = float(_check_e_below_one(e))
     return DesignComparison(mvg=mvg_design(R, e, m1=m1f), met=met_design(R, e, m1=m1f), R=R)

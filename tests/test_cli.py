@@ -103,7 +103,21 @@ def test_design_command():
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)
     assert d["mvg"]["n"] == 6  # paper Fig 17: the optimal MVG stack for R = 0.012, e = 0.8 has 6 masses
-    assert d["mvg"]["gain"] == pytest.approx(5.0407, abs=5e-5)  # references.md, Eq 20
-    assert d["met"]["gain"] == pytest.approx(sum(0.8**k for k in range(1, 11)), rel=1e-12)  # Eq 29, n=10
+    assert d["mvg"]["velocity_gain"] == pytest.approx(5.0407, abs=5e-5)  # references.md, Eq 20
+    assert d["met"]["n"] == 10  # Figs 16-17: ten-mass MET for R ~ 0.0118
+    assert d["met"]["velocity_gain"] == pytest.approx(sum(0.8**k for k in range(1, 11)), rel=1e-12)  # Eq 29
+    for kind in ("mvg", "met"):  # K_n = m_n G^2 / M (top kinetic energy / stack kinetic energy)
+        m = d[kind]["masses"]
+        assert d[kind]["total_mass"] == pytest.approx(sum(m), rel=1e-14)
+        assert d[kind]["energy_efficiency"] == pytest.approx(m[-1] * d[kind]["velocity_gain"] ** 2 / sum(m), rel=1e-12)
+    # the spelling, with a bottom mass: masses in kg, m_1 = 8.4 kg, m_6 = 0.012 * 8.4 kg
+    res = runner.invoke(app, ["design", "--mass-ratio", "0.012", "--restitution", "0.8", "--bottom-mass", "8.4",
+                              "--json"])
+    assert res.exit_code == 0, res.output
+    kg = json.loads(res.stdout)
+    assert kg["mvg"]["masses"][0] == 8.4 and kg["mvg"]["masses"][-1] == pytest.approx(0.1008, rel=1e-14)
+    assert kg["mvg"]["velocity_gain"] == pytest.approx(d["mvg"]["velocity_gain"], rel=1e-15)  # scale-free
+    table = runner.invoke(app, ["design", "--mass-ratio", "0.012", "--restitution", "0.8"])
+    assert table.exit_code == 0 and "MVG/MET" in table.stdout and "5.0407" in table.stdout
     res = runner.invoke(app, ["design", "-R", "1.5", "-e", "0.8"])
     assert res.exit_code == 2 and "R" in res.output
