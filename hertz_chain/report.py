@@ -17,10 +17,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .analysis import Report, analyse
-from .build import Built, build
-from .pulse import G0
+from typing import TYPE_CHECKING
+
+from .constants import G0
 from .stackfile import StackSpec, load_stack_file
+
+if TYPE_CHECKING:  # the simulator stack (JAX) is imported only when a simulation runs
+    from .analysis import Report
 
 __all__ = [
     "run_spec",
@@ -42,9 +45,11 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 def run_spec(spec: StackSpec) -> Report:
     """Build, simulate and analyse a stack spec. A dense output grid is added when the file asks
     for one (`solver.n_output` / `solver.dt_output`)."""
+    from .analysis import analyse
+    from .build import build
     from .simulate import simulate
 
-    built: Built = build(spec)
+    built = build(spec)
     sol = simulate(built.stack, built.state, **built.simulate_options)
     if built.n_output or built.dt_output:
         if built.dt_output:
@@ -135,7 +140,7 @@ def to_dict(report: Report) -> dict:
 
 def to_json(obj) -> str:
     """JSON text of a `Report` (or of any JSON-ready dict)."""
-    data = to_dict(obj) if isinstance(obj, Report) else obj
+    data = obj if isinstance(obj, dict) else to_dict(obj)
     return json.dumps(data, indent=2)
 
 
