@@ -165,17 +165,21 @@ def _build(spec: StackSpec) -> Built:
             if not (np.isfinite(v_c) and v_c > 0):
                 raise StackFileError(f"{cs.source}.calibration_velocity: the rigid model predicts no "
                                      f"impact at interface {j}; give a calibration_velocity")
-        laws[j] = make_law(
-            cs.law,
-            stiffness=_stiffness(spec, cs, j, n),
-            restitution=cs.restitution,
-            effective_mass=float(m_eff),
-            calibration_velocity=v_c,
-            chi_map=cs.chi_map,
-            alpha=cs.alpha,
-            damping=cs.damping,
-            clamp=cs.clamp,
-        )
+        try:
+            laws[j] = make_law(
+                cs.law,
+                stiffness=_stiffness(spec, cs, j, n),
+                restitution=cs.restitution,
+                effective_mass=float(m_eff),
+                calibration_velocity=v_c,
+                chi_map=cs.chi_map,
+                alpha=cs.alpha,
+                damping=cs.damping,
+                clamp=cs.clamp,
+            )
+        except ParameterError as exc:  # name the section of the file that set the offending value
+            raise StackFileError(f"{spec.source + ': ' if spec.source else ''}{cs.source} "
+                                 f"(interface {j}): {exc}") from exc
     stack = Stack(m, [laws[j] for j in interfaces], gravity=g, ground=ground)
     bodies = spec.stack
     if bodies.velocities is not None:

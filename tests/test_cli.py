@@ -74,6 +74,9 @@ BAD = {
     "unknown": NORMATIVE.read_text().replace("rtol = 1e-10", "rtool = 1e-10"),
     "missing": NORMATIVE.read_text().replace('law = "tsuji"\n', ""),
     "units": NORMATIVE.read_text().replace('gaps = "1 cm"', 'gaps = "1 kg"'),
+    # a passive contact cannot return more energy than it received: e <= 1 (the rigid model's
+    # 'active ground' e > 1 has no compliant counterpart)
+    "ground_e": NORMATIVE.read_text() + '\n[contact.ground]\nrestitution = 1.2\n',
 }
 
 
@@ -85,7 +88,8 @@ def test_bad_files_give_one_line_and_status_2(tmp_path, case):
     assert res.exit_code == 2
     lines = [line for line in res.output.splitlines() if line.strip()]
     assert len(lines) == 1 and lines[0].startswith("hertz-chain: error:")
-    key = {"broken": "line", "unknown": "solver.rtool", "missing": "contact.law", "units": "stack.gaps"}[case]
+    key = {"broken": "line", "unknown": "solver.rtool", "missing": "contact.law", "units": "stack.gaps",
+           "ground_e": "contact.ground"}[case]
     assert key in lines[0]
 
 
