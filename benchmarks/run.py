@@ -1,0 +1,664 @@
+"""Benchmark suite of project issue 6: `make bench` (full, ~10-15 min on 2 cores) or `--quick` (CI smoke).
+
+    .venv/bin/python benchmarks/run.py --output benchmarks/results.md [--json benchmarks/results.json]
+    .venv/bin/python benchmarks/run.py --quick --output /tmp/bench.md --json /tmp/bench.json
+
+Sections: (1) single solves of every case (n x regime) by diffrax Tsit5/Dopri8/Kvaerno5 and scipy
+DOP853/Radau/LSODA over a tolerance ladder, against a tight reference, with the matched-accuracy
+comparison; (2) reference checks (an independent integrator; the rigid Eq 19 limit); (3) batched
+throughput; (4) gradient cost; (5) an ablation (sqrt-based contact laws); (6) compile time cold/warm and
+the CLI. See benchmarks/README.md for what every column means. Timings: `time.perf_counter`, results
+blocked with `jax.block_until_ready`, median of repeats, compilation excluded unless stated.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import math
+import os
+import platform
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+# One XLA CPU device per core, so that a batch can be split across both cores (section 3). Single
+# solves run on device 0 as usual. Must be set before JAX is imported.
+_NDEV = max(1, min(os.cpu_count() or 1, 8))
+if "xla_force_host_platform_device_count" not in os.environ.get("XLA_FLAGS", ""):
+    os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") +
+                               f" --xla_force_host_platform_device_count={_NDEV}").strip()
+
+import jax  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+import numpy as np  # noqa: E402
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, HERE)
+
+import hertz_chain as hc  # noqa: E402
+
+import cases  # noqa: E402
+import fastlaws  # noqa: E402
+from methods import (  # noqa: E402
+    DIFFRAX_METHODS, SCIPY_METHODS, DiffraxCase, ScipyCase, median_time, rel_err, steps_budget,
+)
+
+MATCH = 1e-7  # "matched accuracy": launch velocity within 1e-7 relative of the reference
+REF_RTOL = 1e-13
+COMMON_RTOL = 1e-8  # the library default (Tolerances())
+LADDER = tuple(10.0**-k for k in range(5, 13))  # 1e-5 .. 1e-12
+SCIPY_CAP_S = 30.0
+
+
+def log(*a):
+    print(*a, file=sys.stderr, flush=True)
+
+
+# ============================================================================ (1) solver comparison
+def matched_rtol(ladder: list[dict]) -> dict | None:
+    """The loosest rung whose error and the next tighter rung's error are both <= MATCH (a single lucky
+    rung does not count); the tightest rung alone if it is the last. `ladder` is loose to tight."""
+    for i, r in enumerate(ladder):
+        if not (r.get("ok") and r["err"] <= MATCH):
+            continue
+        nxt = ladder[i + 1] if i + 1 < len(ladder) else None
+        if nxt is None or (nxt.get("ok") and nxt["err"] <= MATCH):
+            return r
+    return None
+
+
+def run_case(n: int, regime: str, ladder, quick: bool) -> dict:
+    t_case = time.perf_counter()
+    stack, state = cases.build(n, regime)
+    dc = DiffraxCase(stack, state)
+    ref = dc.solve("dopri8", REF_RTOL)
+    ref_rtol = REF_RTOL
+    if not ref["ok"]:
+        ref, ref_rtol = dc.solve("dopri8", 1e-12), 1e-12
+    v_ref = ref["v_top"]
+    out = dict(n=n, regime=regime, ref=dict(ref, rtol=ref_rtol, solver="dopri8"), methods={})
+    reps = 3 if quick else 9
+
+    for solver in DIFFRAX_METHODS:
+        rungs = []
+        for rtol in ladder:
+            r = dc.solve(solver, rtol)
+            r.update(rtol=rtol, err=rel_err(r["v_top"], v_ref) if r["ok"] else math.inf)
+            rungs.append(r)
+        m = matched_rtol(rungs)
+        for r in rungs:  # timed where the tables report a time: the matched and the common rtol
+            if r["ok"] and (r is m or r["rtol"] == COMMON_RTOL):
+                r["timing_max_steps"] = ms = steps_budget(r["steps"])
+                r["time"] = dc.time_launch(solver, r["rtol"], ms, reps)
+                if r["rtol"] == COMMON_RTOL:
+                    r["time_simulate"] = dc.time_simulate(solver, r["rtol"], r["max_steps"], reps)
+        out["methods"][solver] = dict(kind="diffrax", ladder=rungs, matched=m)
+
+    sp = ScipyCase(stack, state, ref["t_final"])
+    out["rhs_call_us"], out["jac_call_us"] = (1e6 * c for c in sp.rhs_call_cost(500 if quick else 2000))
+    for method in SCIPY_METHODS:
+        rungs = []
+        for rtol in ladder:
+            r = sp.solve(method, rtol, SCIPY_CAP_S)
+            r.update(rtol=rtol, err=rel_err(r["v_top"], v_ref) if r["ok"] else math.inf)
+            rungs.append(r)
+            if r.get("timeout"):
+                break  # tighter rungs cost more
+            m = matched_rtol(rungs)
+            if m is not None and m is not rungs[-1] and rtol <= COMMON_RTOL:
+                break  # matched rung and its tighter neighbour both done, and the common rtol reached
+        m = matched_rtol(rungs)
+        for r in rungs:  # repeats only where the tables report a time
+            if r.get("ok") and (r is m or r["rtol"] == COMMON_RTOL):
+                r["time"] = sp.time_solve(method, r["rtol"], r, repeats=2 if quick else 3, cap_s=SCIPY_CAP_S)
+        out["methods"][method] = dict(kind="scipy", ladder=rungs, matched=m)
+
+    # independent check of the reference: scipy DOP853 at 1e-12 on the same field, ending at t_final
+    chk = sp.solve("DOP853", 1e-12, SCIPY_CAP_S)
+    out["ref_check_dop853"] = rel_err(chk["v_top"], v_ref) if chk.get("ok") else None
+    out["ref_check_tsit5"] = out["methods"]["tsit5"]["ladder"][-1]["err"]  # tsit5 at the tightest rung
+    out["wall_s"] = time.perf_counter() - t_case
+    return out
+
+
+def rigid_checks() -> list[dict]:
+    """Rigid Eq 19 limit: widely gapped n = 2 stacks, where the compliant solution must reproduce the
+    independent-collision gain (Hertz e = 1; Tsuji e = 0.8, calibrated)."""
+    out = []
+    for law in ("hertz", "tsuji"):
+        stack, state, v_eq19 = cases.rigid_check_case(law)
+        ref = DiffraxCase(stack, state).solve("dopri8", REF_RTOL)
+        out.append(dict(law=law, n=2, v_ref=ref["v_top"], v_eq19=v_eq19, status=ref["status"],
+                        rel_diff=rel_err(ref["v_top"], v_eq19)))
+    return out
+
+
+# ============================================================================ (3) batches
+def _designs(B: int, n: int = 5, seed: int = 0):
+    """B designs of one structure: gapped-tsuji regime, mass ratio R log-uniform in [0.01, 0.1]."""
+    rng = np.random.default_rng(seed)
+    ratios = 10 ** rng.uniform(-2, -1, B)
+    built = [cases.build(n, "gapped-tsuji", ratio=R) for R in ratios]
+    stacks = hc.stack_designs([b[0] for b in built])
+    states = jax.tree.map(lambda *x: jnp.stack(x), *[b[1] for b in built])
+    return stacks, states
+
+
+def batch_bench(sizes, quick: bool) -> dict:
+    tol = hc.Tolerances(rtol=COMMON_RTOL, atol=COMMON_RTOL)
+    big_s, big_x = _designs(max(sizes))
+    pilot = hc.simulate_batch(big_s, big_x, tolerances=tol, max_steps=4096)
+    ms = 1 << int(math.ceil(math.log2(1.25 * int(pilot.num_steps.max()))))  # smallest power of 2 with headroom
+    ndev = jax.local_device_count()
+    rows = []
+
+    def lv_vmap(stacks, states):
+        return jax.vmap(lambda s, x: hc.launch_velocity(s, x, tolerances=tol, max_steps=ms))(stacks, states)
+
+    jit_vmap = jax.jit(lv_vmap)
+    pmapped = jax.pmap(lv_vmap)
+    split = lambda tree: jax.tree.map(lambda a: a.reshape((ndev, -1) + a.shape[1:]), tree)  # noqa: E731
+    for B in sizes:
+        stacks = jax.tree.map(lambda a: a[:B], big_s)
+        states = jax.tree.map(lambda a: a[:B], big_x)
+        reps = 3 if quick else 5
+        row = dict(B=B, max_steps=ms, mean_steps=float(np.mean(pilot.num_steps[:B])),
+                   max_steps_used=int(np.max(pilot.num_steps[:B])))
+        t = median_time(lambda: hc.simulate_batch(stacks, states, tolerances=tol, max_steps=ms), reps)
+        row["simulate_batch_ms"] = 1e3 * t / B
+        row["vmap_launch_ms"] = 1e3 * median_time(lambda: jax.block_until_ready(jit_vmap(stacks, states)), reps) / B
+        if ndev > 1 and B % ndev == 0 and not quick:
+            ss, xs = split(stacks), split(states)
+            row["pmap_launch_ms"] = 1e3 * median_time(lambda: jax.block_until_ready(pmapped(ss, xs)), reps) / B
+            if not quick:
+                fs = split(jax.vmap(fastlaws.sqrt_version)(stacks))
+                row["pmap_launch_sqrt_ms"] = 1e3 * median_time(lambda: jax.block_until_ready(pmapped(fs, xs)), reps) / B
+                v_lib = np.asarray(pmapped(ss, xs)).reshape(B, -1)[:, -1]
+                v_sqrt = np.asarray(pmapped(fs, xs)).reshape(B, -1)[:, -1]
+                row["sqrt_max_rel_diff"] = float(np.max(np.abs(v_sqrt - v_lib) / np.abs(v_lib)))
+        rows.append(row)
+        log(f"  batch B={B}: {row}")
+    return dict(n=5, regime="gapped-tsuji, R in [0.01, 0.1]", rtol=COMMON_RTOL, devices=ndev, rows=rows)
+
+
+# ============================================================================ (4) gradients
+def grad_bench(sizes, quick: bool) -> list[dict]:
+    """`jax.grad` of the top launch velocity w.r.t. all masses vs one forward solve, both compiled
+    (`jax.jit`), with `launch_velocity`'s defaults (rtol = atol = 1e-11, resolve_onsets)."""
+    rows = []
+    for n in sizes:
+        stack, state = cases.build(n, "gapped-tsuji")
+        laws, gaps = [stack.law_of(j) for j in stack.interfaces], np.diff(np.asarray(state.positions))
+        tol = hc.Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True)
+        probe = hc.simulate(stack, state, tolerances=tol, max_steps=65536)
+        ms = 1 << int(math.ceil(math.log2(1.25 * probe.num_steps)))  # checkpoints = max_steps: keep it tight
+
+        def top(m, adjoint="reverse"):
+            s = hc.Stack(m, laws, gravity=0.0)
+            return hc.launch_velocity(s, hc.at_impact(s, cases.V_IMPACT, gaps), tolerances=tol, max_steps=ms,
+                                      adjoint=adjoint)[-1]
+
+        m0 = jnp.asarray(stack.masses)
+        fwd = jax.jit(top)
+        grad = jax.jit(jax.grad(top))
+        jacf = jax.jit(jax.jacfwd(lambda m: top(m, "forward")))
+        reps = 3 if quick else 9
+        t_c = time.perf_counter(); jax.block_until_ready(grad(m0)); c_grad = time.perf_counter() - t_c  # noqa: E702
+        t_fwd = median_time(lambda: jax.block_until_ready(fwd(m0)), reps)
+        t_grad = median_time(lambda: jax.block_until_ready(grad(m0)), reps)
+        t_jacf = math.nan if quick else median_time(lambda: jax.block_until_ready(jacf(m0)), reps)
+        g_r = np.asarray(grad(m0))
+        g_f = g_r * math.nan if quick else np.asarray(jacf(m0))
+        fd = []  # central differences, h = 1e-5 m_i (independent check of the gradient's accuracy)
+        for i in range(n):
+            h = 1e-5 * float(m0[i])
+            e = jnp.zeros(n).at[i].set(h)
+            fd.append((float(fwd(m0 + e)) - float(fwd(m0 - e))) / (2 * h))
+        fd = np.asarray(fd)
+        rows.append(dict(n=n, steps=probe.num_steps, max_steps=ms, forward_ms=1e3 * t_fwd, grad_ms=1e3 * t_grad,
+                         jacfwd_ms=1e3 * t_jacf, grad_ratio=t_grad / t_fwd, jacfwd_ratio=t_jacf / t_fwd,
+                         grad_compile_s=c_grad,
+                         rev_vs_fwd_rel=float(np.max(np.abs(g_r - g_f)) / np.max(np.abs(g_f))),
+                         rev_vs_fd_rel=float(np.max(np.abs(g_r - fd)) / np.max(np.abs(fd)))))
+        log(f"  grad n={n}: {rows[-1]}")
+    return rows
+
+
+# ============================================================================ (5) ablation: sqrt laws
+def sqrt_ablation(results: list[dict], n: int = 10) -> list[dict]:
+    """For n-mass cases: the best diffrax method at its matched rtol, and scipy DOP853 at its matched
+    rtol, re-timed with the sqrt-based laws (same equations; `fastlaws`)."""
+    rows = []
+    for res in results:
+        if res["n"] != n:
+            continue
+        best = _best_diffrax(res)
+        dop = res["methods"]["DOP853"]["matched"]
+        if best is None:
+            continue
+        stack, state = cases.build(n, res["regime"])
+        fast = fastlaws.sqrt_version(stack)
+        solver, m = best
+        ms = m["timing_max_steps"]
+        t_fast = DiffraxCase(fast, state).time_launch(solver, m["rtol"], ms, 9)
+        row = dict(regime=res["regime"], solver=solver, rtol=m["rtol"], lib_ms=1e3 * m["time"], sqrt_ms=1e3 * t_fast)
+        if dop is not None:
+            sp = ScipyCase(fast, state, res["ref"]["t_final"])
+            first = sp.solve("DOP853", dop["rtol"], SCIPY_CAP_S)
+            row.update(dop_rtol=dop["rtol"], dop_lib_ms=1e3 * dop["time"],
+                       dop_sqrt_ms=1e3 * sp.time_solve("DOP853", dop["rtol"], first, 3))
+            row["ratio_lib"] = row["dop_lib_ms"] / row["lib_ms"]
+            row["ratio_sqrt"] = row["dop_sqrt_ms"] / row["sqrt_ms"]
+        rows.append(row)
+        log(f"  sqrt ablation: {row}")
+    return rows
+
+
+# ============================================================================ (6) compile, CLI
+def _clean_env(**extra):
+    env = {k: v for k, v in os.environ.items() if k not in ("HERTZ_CHAIN_NO_CACHE", "XLA_FLAGS", "EQX_ON_ERROR")}
+    env.update(extra)
+    return env
+
+
+def compile_and_cli(quick: bool) -> dict:
+    py = sys.executable
+    cli = os.path.join(os.path.dirname(py), "hertz-chain")
+    demo = os.path.join(ROOT, "examples", "issue5_normative.toml")
+    out = dict(probe={}, cli={})
+
+    def wall(cmd, env):
+        t = time.perf_counter()
+        p = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, timeout=300)
+        return time.perf_counter() - t, p
+
+    variants = [] if quick else [("default", {}), ("EQX_ON_ERROR=nan", {"EQX_ON_ERROR": "nan"})]
+    for label, extra in variants:
+        tmp = tempfile.mkdtemp(prefix="hc-bench-cache-")
+        try:
+            env = _clean_env(HERTZ_CHAIN_CACHE_DIR=tmp, **extra)
+            rec = {}
+            for phase in ("cold", "warm"):
+                _, p = wall([py, os.path.join(HERE, "probe_compile.py")], env)
+                if p.returncode != 0:
+                    raise RuntimeError(p.stderr[-2000:])
+                rec[phase] = json.loads(p.stdout.strip().splitlines()[-1])
+            rec["cache_files"] = len(os.listdir(tmp))
+            rec["solve_cached"] = any(f.startswith("jit__solve_impl") for f in os.listdir(tmp))
+            out["probe"][label] = rec
+            log(f"  compile probe [{label}]: {rec}")
+            if not quick and os.path.exists(cli):
+                tmp2 = tempfile.mkdtemp(prefix="hc-bench-cli-")
+                env2 = _clean_env(HERTZ_CHAIN_CACHE_DIR=tmp2, **extra)
+                t_cold, p = wall([cli, "simulate", demo], env2)
+                ok = p.returncode == 0
+                warm = [wall([cli, "simulate", demo], env2)[0] for _ in range(3)]
+                out["cli"][label] = dict(cold_s=t_cold, warm_s=statistics.median(warm), warm_all=warm, ok=ok,
+                                         solve_cached=any(f.startswith("jit__solve_impl") for f in os.listdir(tmp2)))
+                shutil.rmtree(tmp2, ignore_errors=True)
+                log(f"  cli [{label}]: {out['cli'][label]}")
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+    if os.path.exists(cli):
+        out["help_s"] = statistics.median([wall([cli, "--help"], _clean_env())[0] for _ in range(3 if quick else 5)])
+    return out
+
+
+# ============================================================================ summaries
+def _best_diffrax(res):
+    best = None
+    for solver in DIFFRAX_METHODS:
+        m = res["methods"][solver]["matched"]
+        if m is not None and (best is None or m["time"] < best[1]["time"]):
+            best = (solver, m)
+    return best
+
+
+def targets(results, batch, grads, comp) -> list[dict]:
+    rows = []
+    for res in results:
+        if res["n"] != 10:
+            continue
+        best = _best_diffrax(res)
+        for scipy_m, goal in (("DOP853", 15.0), ("Radau", 50.0)):
+            m = res["methods"][scipy_m]["matched"]
+            last = res["methods"][scipy_m]["ladder"][-1]
+            if best is None:
+                val, note = None, "no diffrax method reached 1e-7"
+            elif m is None:
+                val = None
+                note = f"{scipy_m} never reached 1e-7" + (" (timed out)" if last.get("timeout") else "")
+            else:
+                val = m["time"] / best[1]["time"]
+                note = f"{best[0]} @ {best[1]['rtol']:.0e} vs {scipy_m} @ {m['rtol']:.0e}"
+            rows.append(dict(target=f"10-mass solve vs {scipy_m} at matched accuracy ({res['regime']})",
+                             goal=f">= {goal:g}x", value=None if val is None else f"{val:.1f}x",
+                             met=None if val is None else val >= goal, note=note))
+    if batch:
+        big = max(batch["rows"], key=lambda r: r["B"])
+        val = min(big.get("pmap_launch_ms", math.inf), big["vmap_launch_ms"], big["simulate_batch_ms"])
+        rows.append(dict(target=f"batched 5-mass designs, B = {max(x['B'] for x in batch['rows'])}",
+                         goal="<= 0.5 ms/design", value=f"{val:.3f} ms", met=val <= 0.5,
+                         note="best of simulate_batch / vmap / vmap split over both cores"))
+    for g in grads or []:
+        rows.append(dict(target=f"jax.grad of top launch velocity w.r.t. {g['n']} masses",
+                         goal="<= 5x one solve", value=f"{g['grad_ratio']:.1f}x", met=g["grad_ratio"] <= 5,
+                         note=f"{g['grad_ms']:.1f} ms vs {g['forward_ms']:.1f} ms (both jitted)"))
+        if math.isfinite(g["jacfwd_ratio"]):
+            rows.append(dict(target=f"same gradient by forward mode (jax.jacfwd, adjoint='forward'), {g['n']} masses",
+                             goal="<= 5x one solve", value=f"{g['jacfwd_ratio']:.1f}x", met=g["jacfwd_ratio"] <= 5,
+                             note=f"{g['jacfwd_ms']:.1f} ms; alternative to jax.grad for n parameters"))
+    for label, c in (comp or {}).get("cli", {}).items():
+        rows.append(dict(target=f"warm `hertz-chain simulate` of the demo [{label}]", goal="< 5 s",
+                         value=f"{c['warm_s']:.2f} s", met=c["warm_s"] < 5.0 and c["ok"],
+                         note=f"solve cached on disk: {c['solve_cached']}"))
+    return rows
+
+
+def recommend(results) -> list[dict]:
+    """Per regime: the diffrax method with the smallest total time at matched accuracy over all n."""
+    out = []
+    for regime in sorted({r["regime"] for r in results}, key=list(cases.REGIMES).index):
+        per = {}
+        for solver in DIFFRAX_METHODS:
+            tot, rt, ok = 0.0, [], True
+            for res in results:
+                if res["regime"] != regime:
+                    continue
+                m = res["methods"][solver]["matched"]
+                if m is None:
+                    ok = False
+                    rt.append(f"n={res['n']}: -")
+                    continue
+                tot += m["time"]
+                rt.append(f"n={res['n']}: {m['rtol']:.0e}")
+            per[solver] = (tot if ok else math.inf, rt)
+        best = min(per, key=lambda s: per[s][0])
+        out.append(dict(regime=regime, best=best, total_ms=1e3 * per[best][0], rtols=per[best][1],
+                        others={s: 1e3 * v[0] for s, v in per.items()}))
+    return out
+
+
+# ============================================================================ markdown
+def _f(x, fmt="{:.2f}", none="-"):
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return none
+    return fmt.format(x)
+
+
+def _e(x):
+    return _f(x, "{:.1e}")
+
+
+def _steps(r):
+    if not r or not r.get("ok"):
+        return "-"
+    rej = "n/a" if r.get("rejected") is None else r["rejected"]
+    return f"{r['steps']} ({r['accepted']}/{rej})"
+
+
+def _time_ms(r):
+    if r is None:
+        return "-"
+    if r.get("timeout"):
+        return f"> {SCIPY_CAP_S:g} s"
+    return _f(1e3 * r["time"]) if "time" in r and r.get("ok") else "-"
+
+
+def machine() -> dict:
+    model = "?"
+    try:
+        for line in subprocess.run(["lscpu"], capture_output=True, text=True).stdout.splitlines():
+            if line.startswith("Model name"):
+                model = line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    import diffrax
+    import equinox
+    import jaxlib
+    import scipy
+
+    return dict(cpu=model, cores=os.cpu_count(), xla_devices=jax.local_device_count(), python=platform.python_version(),
+                jax=jax.__version__, jaxlib=jaxlib.__version__, diffrax=diffrax.__version__,
+                equinox=equinox.__version__, scipy=scipy.__version__, numpy=np.__version__,
+                date=datetime.datetime.now().astimezone().isoformat(timespec="seconds"),
+                loadavg_start=os.getloadavg()[0])
+
+
+def markdown(data: dict) -> str:
+    L = []
+    mc = data["machine"]
+    L += ["# hertz_chain benchmarks", "",
+          f"Generated by `benchmarks/run.py{' --quick' if data['quick'] else ''}` on {mc['date']} "
+          f"(total {data['wall_s'] / 60:.1f} min). Column meanings and how to rerun: `benchmarks/README.md`.", "",
+          f"Machine: {mc['cpu']}, {mc['cores']} cores ({mc['xla_devices']} XLA CPU devices), load average at start "
+          f"{mc['loadavg_start']:.2f} (timings are noisy: other work shared the machine; compare ratios within this run). "
+          f"Python {mc['python']}, jax {mc['jax']}, jaxlib {mc['jaxlib']}, diffrax {mc['diffrax']}, equinox "
+          f"{mc['equinox']}, scipy {mc['scipy']}, numpy {mc['numpy']}.", ""]
+
+    L += ["## Targets", "", "| target | goal | measured | met | how |", "|---|---|---|---|---|"]
+    for t in data["targets"]:
+        met = "n/a" if t["met"] is None else ("yes" if t["met"] else "**no**")
+        L.append(f"| {t['target']} | {t['goal']} | {t['value'] or '-'} | {met} | {t['note']} |")
+    L.append("")
+
+    if data["recommend"]:
+        L += ["## Suggested diffrax solver per regime", "",
+              "Fastest diffrax method at matched accuracy (launch velocity within 1e-7), summed over n; the loosest "
+              "rtol = atol of the ladder that reaches it per n. Other columns: the same sum for each method "
+              "(ms; `inf` = missed 1e-7 for some n).", "",
+              "| regime | best | total ms | rtol needed | " + " | ".join(DIFFRAX_METHODS) + " |",
+              "|---|---|---|---|" + "---|" * len(DIFFRAX_METHODS)]
+        for r in data["recommend"]:
+            L.append(f"| {r['regime']} | {r['best']} | {r['total_ms']:.1f} | {', '.join(r['rtols'])} | "
+                     + " | ".join(_f(r["others"][s], "{:.1f}", "inf") for s in DIFFRAX_METHODS) + " |")
+        L.append("")
+
+    L += ["## Single solves", "",
+          "Per case: reference = diffrax Dopri8 at rtol = atol = 1e-13 (scaled units). **matched**: the loosest ladder rtol "
+          "reaching 1e-7 relative error (and the next tighter one too); time there; `x DOP853` = DOP853's matched time over "
+          "this method's. **@1e-8**: every method at the library default rtol = atol = 1e-8. diffrax times are compiled "
+          "`launch_velocity` calls; `simulate()` adds the user-facing host-side post-processing. steps = attempted "
+          "(accepted/rejected). scipy: jitted JAX RHS (+ jitted `jax.jacfwd` Jacobian for Radau/LSODA), "
+          "one dispatch per evaluation.", ""]
+    for n in sorted({r["n"] for r in data["cases"]}):
+        L += [f"### n = {n}", "",
+              "| regime | method | rtol* | time* ms | err* | steps* | x DOP853 | time@1e-8 ms | simulate() ms | err@1e-8 | steps@1e-8 |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
+        for res in data["cases"]:
+            if res["n"] != n:
+                continue
+            dop = res["methods"]["DOP853"]["matched"]
+            for meth, rec in res["methods"].items():
+                m = rec["matched"]
+                c = next((r for r in rec["ladder"] if r["rtol"] == COMMON_RTOL), None)
+                last = rec["ladder"][-1]
+                if m is None:
+                    rt = "timed out" if last.get("timeout") else "not reached"
+                else:
+                    rt = f"{m['rtol']:.0e}"
+                ratio = dop["time"] / m["time"] if (m is not None and dop is not None) else None
+                L.append(f"| {res['regime']} | {meth} | {rt} | {_time_ms(m)} | {_e(m['err'] if m else None)} | "
+                         f"{_steps(m)} | {_f(ratio, '{:.1f}')} | {_time_ms(c) if c else ('> cap' if last.get('timeout') else '-')} | "
+                         f"{_f(1e3 * c['time_simulate']) if c and 'time_simulate' in c else ''} | "
+                         f"{_e(c['err'] if c and c.get('ok') else None)} | {_steps(c)} |")
+        L.append("")
+
+    L += ["## Reference checks", "",
+          f"`tsit5@{data['ladder'][-1]:.0e}`, `DOP853@1e-12`: relative difference of the top launch velocity from the reference (another "
+          "diffrax method; scipy's DOP853 on the same field ending at the reference's `t_final`). RHS/Jacobian call: "
+          "cost of one jitted evaluation called from Python (what scipy pays per evaluation).", "",
+          f"| n | regime | v_ref (m/s) | ref steps | t_final (ms) | tsit5@{data['ladder'][-1]:.0e} | DOP853@1e-12 | RHS call us | Jacobian call us | case wall s |",
+          "|---|---|---|---|---|---|---|---|---|---|"]
+    for res in data["cases"]:
+        ref = res["ref"]
+        L.append(f"| {res['n']} | {res['regime']} | {ref['v_top']:.10g} | {ref['steps']} | {1e3 * ref['t_final']:.3f} | "
+                 f"{_e(res['ref_check_tsit5'])} | {_e(res['ref_check_dop853'])} | {res['rhs_call_us']:.1f} | "
+                 f"{res['jac_call_us']:.1f} | {res['wall_s']:.0f} |")
+    L += ["", "Rigid limit (paper Eq 19, independent collisions): n = 2, gaps 1 cm, g = 0; reference vs "
+          "`stack_gain(masses, e) * v`:", "", "| law | v_ref (m/s) | Eq 19 (m/s) | rel. diff |", "|---|---|---|---|"]
+    for r in data["rigid"]:
+        L.append(f"| {r['law']} | {r['v_ref']:.12g} | {r['v_eq19']:.12g} | {r['rel_diff']:.1e} |")
+    L.append("")
+
+    b = data.get("batch")
+    if b:
+        L += ["## Batched throughput", "",
+              f"{b['n']}-mass designs ({b['regime']}), rtol = atol = {b['rtol']:g}, max_steps = {b['rows'][0]['max_steps']} "
+              f"(a power of two with 25 % headroom over the slowest design). ms per design (batch time / B). "
+              f"`simulate_batch`: the library's batched entry point (one device); `vmap`: `jax.jit(jax.vmap(launch_velocity))` "
+              f"(one device); `2 cores`: the same split over {b['devices']} XLA CPU devices with `jax.pmap`; `sqrt laws`: "
+              f"the 2-core run with the ablation laws (section below).", "",
+              "| B | mean steps | simulate_batch | vmap | 2 cores | 2 cores, sqrt laws |", "|---|---|---|---|---|---|"]
+        for r in b["rows"]:
+            L.append(f"| {r['B']} | {r['mean_steps']:.0f} | {r['simulate_batch_ms']:.3f} | {r['vmap_launch_ms']:.3f} | "
+                     f"{_f(r.get('pmap_launch_ms'), '{:.3f}')} | {_f(r.get('pmap_launch_sqrt_ms'), '{:.3f}')} |")
+        L.append("")
+
+    if data.get("grads"):
+        L += ["## Gradient cost", "",
+              "Gapped Tsuji stack, `launch_velocity` defaults (rtol = atol = 1e-11, `resolve_onsets=True`). forward: "
+              "`jax.jit` of the top launch velocity as a function of the masses; grad: `jax.jit(jax.grad(...))` "
+              "(reverse mode, `RecursiveCheckpointAdjoint`); jacfwd: `adjoint=\"forward\"` with `jax.jacfwd`. rev vs fwd / FD: "
+              "max |difference| / max |gradient| against forward mode and central differences (h = 1e-5 m_i).", "",
+              "| n | steps | max_steps | forward ms | grad ms | grad / forward | jacfwd ms | jacfwd / forward | grad compile s | rev vs fwd | rev vs FD |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
+        for g in data["grads"]:
+            L.append(f"| {g['n']} | {g['steps']} | {g['max_steps']} | {g['forward_ms']:.2f} | {g['grad_ms']:.2f} | "
+                     f"{g['grad_ratio']:.2f} | {g['jacfwd_ms']:.2f} | {g['jacfwd_ratio']:.2f} | {g['grad_compile_s']:.1f} | "
+                     f"{g['rev_vs_fwd_rel']:.1e} | {g['rev_vs_fd_rel']:.1e} |")
+        L.append("")
+
+    if data.get("ablation"):
+        L += ["## Ablation: contact laws with sqrt instead of fractional powers", "",
+              "Same equations; `d**1.5 -> d*sqrt(d)`, `d**0.25 -> sqrt(sqrt(d))` (`benchmarks/fastlaws.py`). 10-mass "
+              "cases, each method at its matched rtol from the table above; scipy also uses the sqrt laws.", "",
+              "| regime | diffrax | rtol | library ms | sqrt ms | DOP853 rtol | DOP853 lib ms | DOP853 sqrt ms | ratio lib | ratio sqrt |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
+        for r in data["ablation"]:
+            L.append(f"| {r['regime']} | {r['solver']} | {r['rtol']:.0e} | {r['lib_ms']:.2f} | {r['sqrt_ms']:.2f} | "
+                     f"{_f(r.get('dop_rtol'), '{:.0e}')} | {_f(r.get('dop_lib_ms'))} | {_f(r.get('dop_sqrt_ms'))} | "
+                     f"{_f(r.get('ratio_lib'), '{:.1f}')} | {_f(r.get('ratio_sqrt'), '{:.1f}')} |")
+        L.append("")
+
+    c = data.get("compile")
+    if c:
+        L += ["## Compile time and the CLI", ""]
+    if c and c["probe"]:
+        L += ["Subprocesses (`benchmarks/probe_compile.py`): cold = empty `HERTZ_CHAIN_CACHE_DIR`, warm = the same folder "
+              "again. first = trace + compile (or cache load) + run; second = run only. 5-mass gapped Tsuji, rtol 1e-8.", "",
+              "| env | phase | import s | simulate first s | simulate second s | launch_velocity first s | launch second s | solve on disk |",
+              "|---|---|---|---|---|---|---|---|"]
+        for label, rec in c["probe"].items():
+            for ph in ("cold", "warm"):
+                p = rec[ph]
+                L.append(f"| {label} | {ph} | {p['import_s']:.2f} | {p['simulate_first_s']:.2f} | {p['simulate_second_s']:.3f} | "
+                         f"{p['launch_first_s']:.2f} | {p['launch_second_s']:.3f} | {rec['solve_cached']} |")
+    if c:
+        if c.get("cli"):
+            L += ["", "`hertz-chain simulate examples/issue5_normative.toml` wall time (s), fresh cache folder:", "",
+                  "| env | cold | warm (median of 3) | solve cached on disk |", "|---|---|---|---|"]
+            for label, r in c["cli"].items():
+                L.append(f"| {label} | {r['cold_s']:.2f} | {r['warm_s']:.2f} | {r['solve_cached']} |")
+        if "help_s" in c:
+            L += ["", f"`hertz-chain --help`: {c['help_s']:.2f} s (median)."]
+        L.append("")
+
+    L += ["## Error ladders", "",
+          "Relative error of the top launch velocity per rtol = atol, and the time (ms) where measured (diffrax: at the "
+          "matched and the common rtol; scipy: one run per rung, the median of repeats at those two). `> cap`: a scipy run "
+          f"stopped after {SCIPY_CAP_S:g} s; blank: not run (scipy stops once its matched rtol and the next tighter one are done and 1e-8 is reached).", "",
+          "| n | regime | method | " + " | ".join(f"{r:.0e}" for r in data["ladder"]) + " |",
+          "|---|---|---|" + "---|" * len(data["ladder"])]
+    for res in data["cases"]:
+        for meth, rec in res["methods"].items():
+            cells = []
+            for r in rec["ladder"]:
+                if r.get("timeout"):
+                    cells.append("> cap")
+                elif not r.get("ok"):
+                    cells.append("fail")
+                else:
+                    cells.append(f"{r['err']:.0e}" + (f" / {_time_ms(r)}" if "time" in r else ""))
+            cells += [""] * (len(data["ladder"]) - len(cells))
+            L.append(f"| {res['n']} | {res['regime']} | {meth} | " + " | ".join(cells) + " |")
+    L.append("")
+    return "\n".join(L)
+
+
+# ============================================================================ main
+def _jsonable(x):
+    if isinstance(x, dict):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        return float(x) if math.isfinite(x) else str(x)
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--output", default=os.path.join(HERE, "results.md"), help="Markdown table to write.")
+    ap.add_argument("--json", default=None, help="Also write the raw results as JSON.")
+    ap.add_argument("--quick", action="store_true", help="CI smoke run: n = 2, one regime, one batch size, no CLI.")
+    ap.add_argument("--sizes", default=None, help="Comma-separated n (default 2,5,10,20).")
+    ap.add_argument("--regimes", default=None, help=f"Comma-separated regimes (default all: {','.join(cases.REGIMES)}).")
+    ap.add_argument("--skip", default="", help="Comma-separated sections to skip: batch,grad,ablation,compile.")
+    args = ap.parse_args(argv)
+    t0 = time.perf_counter()
+    quick = args.quick
+    sizes = [int(s) for s in args.sizes.split(",")] if args.sizes else ([2] if quick else list(cases.SIZES))
+    regimes = args.regimes.split(",") if args.regimes else (["gapped-tsuji"] if quick else list(cases.REGIMES))
+    ladder = (1e-6, 1e-8, 1e-10) if quick else LADDER
+    skip = set(filter(None, args.skip.split(",")))
+    data = dict(quick=quick, machine=machine(), ladder=list(ladder), match=MATCH)
+    log(f"machine: {data['machine']}")
+
+    data["cases"] = []
+    for n in sizes:
+        for regime in regimes:
+            log(f"case n={n} {regime} ...")
+            res = run_case(n, regime, ladder, quick)
+            data["cases"].append(res)
+            log(f"  done in {res['wall_s']:.0f} s; matched: " + ", ".join(
+                f"{k}={v['matched']['rtol']:.0e}" if v["matched"] else f"{k}=-" for k, v in res["methods"].items()))
+    data["section_s"] = {"cases": time.perf_counter() - t0}
+
+    def section(name, fn):
+        t = time.perf_counter()
+        data[name] = fn()
+        data["section_s"][name] = time.perf_counter() - t
+        log(f"section {name}: {data['section_s'][name]:.0f} s")
+
+    section("rigid", rigid_checks)
+    section("batch", lambda: None if "batch" in skip else batch_bench([16] if quick else [1, 16, 256, 1024], quick))
+    section("grads", lambda: None if "grad" in skip else grad_bench([2] if quick else [5, 10], quick))
+    section("ablation", lambda: None if ("ablation" in skip or quick) else sqrt_ablation(data["cases"]))
+    section("compile", lambda: None if "compile" in skip else compile_and_cli(quick))
+    data["targets"] = targets(data["cases"], data["batch"], data["grads"], data["compile"])
+    data["recommend"] = recommend(data["cases"])
+    data["wall_s"] = time.perf_counter() - t0
+    md = markdown(data)
+    os.makedirs(os.path.dirname(os.path.abspath(args.output)), exist_ok=True)
+    with open(args.output, "w") as fh:
+        fh.write(md)
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(_jsonable(data), fh, indent=1)
+    log(f"wrote {args.output} in {data['wall_s']:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
