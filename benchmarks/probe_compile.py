@@ -23,7 +23,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import cases  # noqa: E402
 
 stack, state = cases.build(5, "gapped-tsuji")
-tol = hc.Tolerances(rtol=1e-8, atol=1e-8)
+tol = hc.Tolerances()  # the library default
 
 
 def timed(fn):

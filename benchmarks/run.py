@@ -6,7 +6,7 @@
 Sections: (1) single solves of every case (n x regime) by diffrax Tsit5/Dopri8/Kvaerno5 and scipy
 DOP853/Radau/LSODA over a tolerance ladder, against a tight reference, with the matched-accuracy
 comparison; (2) reference checks (an independent integrator; the rigid Eq 19 limit); (3) batched
-throughput; (4) gradient cost; (5) an ablation (sqrt-based contact laws); (6) compile time cold/warm and
+throughput; (4) gradient cost; (5) compile time cold/warm and
 the CLI. See benchmarks/README.md for what every column means. Timings: `time.perf_counter`, results
 blocked with `jax.block_until_ready`, median of repeats, compilation excluded unless stated.
 """
@@ -44,14 +44,13 @@ sys.path.insert(0, HERE)
 import hertz_chain as hc  # noqa: E402
 
 import cases  # noqa: E402
-import fastlaws  # noqa: E402
 from methods import (  # noqa: E402
     DIFFRAX_METHODS, SCIPY_METHODS, DiffraxCase, ScipyCase, median_time, rel_err, steps_budget,
 )
 
 MATCH = 1e-7  # "matched accuracy": launch velocity within 1e-7 relative of the reference
 REF_RTOL = 1e-13
-COMMON_RTOL = 1e-8  # the library default (Tolerances())
+COMMON_RTOL = 1e-10  # the library default rtol = atol (Tolerances())
 LADDER = tuple(10.0**-k for k in range(5, 13))  # 1e-5 .. 1e-12
 SCIPY_CAP_S = 30.0
 
@@ -151,7 +150,7 @@ def _designs(B: int, n: int = 5, seed: int = 0):
 
 
 def batch_bench(sizes, quick: bool) -> dict:
-    tol = hc.Tolerances(rtol=COMMON_RTOL, atol=COMMON_RTOL)
+    tol = hc.Tolerances()  # the library default (rtol = atol = 1e-10, onset proxy on)
     big_s, big_x = _designs(max(sizes))
     pilot = hc.simulate_batch(big_s, big_x, tolerances=tol, max_steps=4096)
     ms = 1 << int(math.ceil(math.log2(1.25 * int(pilot.num_steps.max()))))  # smallest power of 2 with headroom
@@ -176,15 +175,9 @@ def batch_bench(sizes, quick: bool) -> dict:
         if ndev > 1 and B % ndev == 0 and not quick:
             ss, xs = split(stacks), split(states)
             row["pmap_launch_ms"] = 1e3 * median_time(lambda: jax.block_until_ready(pmapped(ss, xs)), reps) / B
-            if not quick:
-                fs = split(jax.vmap(fastlaws.sqrt_version)(stacks))
-                row["pmap_launch_sqrt_ms"] = 1e3 * median_time(lambda: jax.block_until_ready(pmapped(fs, xs)), reps) / B
-                v_lib = np.asarray(pmapped(ss, xs)).reshape(B, -1)[:, -1]
-                v_sqrt = np.asarray(pmapped(fs, xs)).reshape(B, -1)[:, -1]
-                row["sqrt_max_rel_diff"] = float(np.max(np.abs(v_sqrt - v_lib) / np.abs(v_lib)))
         rows.append(row)
         log(f"  batch B={B}: {row}")
-    return dict(n=5, regime="gapped-tsuji, R in [0.01, 0.1]", rtol=COMMON_RTOL, devices=ndev, rows=rows)
+    return dict(n=5, regime="gapped-tsuji, R in [0.01, 0.1]", rtol=tol.rtol, devices=ndev, rows=rows)
 
 
 # ============================================================================ (4) gradients
@@ -230,37 +223,7 @@ def grad_bench(sizes, quick: bool) -> list[dict]:
     return rows
 
 
-# ============================================================================ (5) ablation: sqrt laws
-def sqrt_ablation(results: list[dict], n: int = 10) -> list[dict]:
-    """For n-mass cases: the best diffrax method at its matched rtol, and scipy DOP853 at its matched
-    rtol, re-timed with the sqrt-based laws (same equations; `fastlaws`)."""
-    rows = []
-    for res in results:
-        if res["n"] != n:
-            continue
-        best = _best_diffrax(res)
-        dop = res["methods"]["DOP853"]["matched"]
-        if best is None:
-            continue
-        stack, state = cases.build(n, res["regime"])
-        fast = fastlaws.sqrt_version(stack)
-        solver, m = best
-        ms = m["timing_max_steps"]
-        t_fast = DiffraxCase(fast, state).time_launch(solver, m["rtol"], ms, 9)
-        row = dict(regime=res["regime"], solver=solver, rtol=m["rtol"], lib_ms=1e3 * m["time"], sqrt_ms=1e3 * t_fast)
-        if dop is not None:
-            sp = ScipyCase(fast, state, res["ref"]["t_final"])
-            first = sp.solve("DOP853", dop["rtol"], SCIPY_CAP_S)
-            row.update(dop_rtol=dop["rtol"], dop_lib_ms=1e3 * dop["time"],
-                       dop_sqrt_ms=1e3 * sp.time_solve("DOP853", dop["rtol"], first, 3))
-            row["ratio_lib"] = row["dop_lib_ms"] / row["lib_ms"]
-            row["ratio_sqrt"] = row["dop_sqrt_ms"] / row["sqrt_ms"]
-        rows.append(row)
-        log(f"  sqrt ablation: {row}")
-    return rows
-
-
-# ============================================================================ (6) compile, CLI
+# ============================================================================ (5) compile, CLI
 def _clean_env(**extra):
     env = {k: v for k, v in os.environ.items() if k not in ("HERTZ_CHAIN_NO_CACHE", "XLA_FLAGS", "EQX_ON_ERROR")}
     env.update(extra)
@@ -463,13 +426,13 @@ def markdown(data: dict) -> str:
     L += ["## Single solves", "",
           "Per case: reference = diffrax Dopri8 at rtol = atol = 1e-13 (scaled units). **matched**: the loosest ladder rtol "
           "reaching 1e-7 relative error (and the next tighter one too); time there; `x DOP853` = DOP853's matched time over "
-          "this method's. **@1e-8**: every method at the library default rtol = atol = 1e-8. diffrax times are compiled "
+          "this method's. **@1e-10**: every method at the library default rtol = atol = 1e-10 (diffrax without the onset proxy, the same equations as scipy). diffrax times are compiled "
           "`launch_velocity` calls; `simulate()` adds the user-facing host-side post-processing. steps = attempted "
           "(accepted/rejected). scipy: jitted JAX RHS (+ jitted `jax.jacfwd` Jacobian for Radau/LSODA), "
           "one dispatch per evaluation.", ""]
     for n in sorted({r["n"] for r in data["cases"]}):
         L += [f"### n = {n}", "",
-              "| regime | method | rtol* | time* ms | err* | steps* | x DOP853 | time@1e-8 ms | simulate() ms | err@1e-8 | steps@1e-8 |",
+              "| regime | method | rtol* | time* ms | err* | steps* | x DOP853 | time@1e-10 ms | simulate() ms | err@1e-10 | steps@1e-10 |",
               "|---|---|---|---|---|---|---|---|---|---|---|"]
         for res in data["cases"]:
             if res["n"] != n:
@@ -513,12 +476,11 @@ def markdown(data: dict) -> str:
               f"{b['n']}-mass designs ({b['regime']}), rtol = atol = {b['rtol']:g}, max_steps = {b['rows'][0]['max_steps']} "
               f"(a power of two with 25 % headroom over the slowest design). ms per design (batch time / B). "
               f"`simulate_batch`: the library's batched entry point (one device); `vmap`: `jax.jit(jax.vmap(launch_velocity))` "
-              f"(one device); `2 cores`: the same split over {b['devices']} XLA CPU devices with `jax.pmap`; `sqrt laws`: "
-              f"the 2-core run with the ablation laws (section below).", "",
-              "| B | mean steps | simulate_batch | vmap | 2 cores | 2 cores, sqrt laws |", "|---|---|---|---|---|---|"]
+              f"(one device); `2 cores`: the same split over {b['devices']} XLA CPU devices with `jax.pmap`;.", "",
+              "| B | mean steps | simulate_batch | vmap | 2 cores |", "|---|---|---|---|---|"]
         for r in b["rows"]:
             L.append(f"| {r['B']} | {r['mean_steps']:.0f} | {r['simulate_batch_ms']:.3f} | {r['vmap_launch_ms']:.3f} | "
-                     f"{_f(r.get('pmap_launch_ms'), '{:.3f}')} | {_f(r.get('pmap_launch_sqrt_ms'), '{:.3f}')} |")
+                     f"{_f(r.get('pmap_launch_ms'), '{:.3f}')} |")
         L.append("")
 
     if data.get("grads"):
@@ -535,24 +497,12 @@ def markdown(data: dict) -> str:
                      f"{g['rev_vs_fwd_rel']:.1e} | {g['rev_vs_fd_rel']:.1e} |")
         L.append("")
 
-    if data.get("ablation"):
-        L += ["## Ablation: contact laws with sqrt instead of fractional powers", "",
-              "Same equations; `d**1.5 -> d*sqrt(d)`, `d**0.25 -> sqrt(sqrt(d))` (`benchmarks/fastlaws.py`). 10-mass "
-              "cases, each method at its matched rtol from the table above; scipy also uses the sqrt laws.", "",
-              "| regime | diffrax | rtol | library ms | sqrt ms | DOP853 rtol | DOP853 lib ms | DOP853 sqrt ms | ratio lib | ratio sqrt |",
-              "|---|---|---|---|---|---|---|---|---|---|"]
-        for r in data["ablation"]:
-            L.append(f"| {r['regime']} | {r['solver']} | {r['rtol']:.0e} | {r['lib_ms']:.2f} | {r['sqrt_ms']:.2f} | "
-                     f"{_f(r.get('dop_rtol'), '{:.0e}')} | {_f(r.get('dop_lib_ms'))} | {_f(r.get('dop_sqrt_ms'))} | "
-                     f"{_f(r.get('ratio_lib'), '{:.1f}')} | {_f(r.get('ratio_sqrt'), '{:.1f}')} |")
-        L.append("")
-
     c = data.get("compile")
     if c:
         L += ["## Compile time and the CLI", ""]
     if c and c["probe"]:
         L += ["Subprocesses (`benchmarks/probe_compile.py`): cold = empty `HERTZ_CHAIN_CACHE_DIR`, warm = the same folder "
-              "again. first = trace + compile (or cache load) + run; second = run only. 5-mass gapped Tsuji, rtol 1e-8.", "",
+              "again. first = trace + compile (or cache load) + run; second = run only. 5-mass gapped Tsuji, default tolerances.", "",
               "| env | phase | import s | simulate first s | simulate second s | launch_velocity first s | launch second s | solve on disk |",
               "|---|---|---|---|---|---|---|---|"]
         for label, rec in c["probe"].items():
@@ -573,7 +523,7 @@ def markdown(data: dict) -> str:
     L += ["## Error ladders", "",
           "Relative error of the top launch velocity per rtol = atol, and the time (ms) where measured (diffrax: at the "
           "matched and the common rtol; scipy: one run per rung, the median of repeats at those two). `> cap`: a scipy run "
-          f"stopped after {SCIPY_CAP_S:g} s; blank: not run (scipy stops once its matched rtol and the next tighter one are done and 1e-8 is reached).", "",
+          f"stopped after {SCIPY_CAP_S:g} s; blank: not run (scipy stops once its matched rtol and the next tighter one are done and 1e-10 is reached).", "",
           "| n | regime | method | " + " | ".join(f"{r:.0e}" for r in data["ladder"]) + " |",
           "|---|---|---|" + "---|" * len(data["ladder"])]
     for res in data["cases"]:
@@ -614,7 +564,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="CI smoke run: n = 2, one regime, one batch size, no CLI.")
     ap.add_argument("--sizes", default=None, help="Comma-separated n (default 2,5,10,20).")
     ap.add_argument("--regimes", default=None, help=f"Comma-separated regimes (default all: {','.join(cases.REGIMES)}).")
-    ap.add_argument("--skip", default="", help="Comma-separated sections to skip: batch,grad,ablation,compile.")
+    ap.add_argument("--skip", default="", help="Comma-separated sections to skip: batch,grad,compile.")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     quick = args.quick
@@ -644,7 +594,6 @@ def main(argv=None) -> int:
     section("rigid", rigid_checks)
     section("batch", lambda: None if "batch" in skip else batch_bench([16] if quick else [1, 16, 256, 1024], quick))
     section("grads", lambda: None if "grad" in skip else grad_bench([2] if quick else [5, 10], quick))
-    section("ablation", lambda: None if ("ablation" in skip or quick) else sqrt_ablation(data["cases"]))
     section("compile", lambda: None if "compile" in skip else compile_and_cli(quick))
     data["targets"] = targets(data["cases"], data["batch"], data["grads"], data["compile"])
     data["recommend"] = recommend(data["cases"])

@@ -169,6 +169,18 @@ class Stack(eqx.Module):
         """`(n,)` booleans: which interfaces exist (entry 0 is False without the ground)."""
         return jnp.asarray([self.ground] + [True] * (self.n - 1))
 
+    def clamped(self) -> np.ndarray:
+        """`(n,)` static booleans: which interfaces use the no-tension clamp (`law.clamp`).
+
+        A clamped contact is open once its force is zero (it may let go at `delta > 0`); an unclamped
+        one (tensile force allowed while `delta > 0`) is open once `delta <= 0`. Entry 0 is True
+        without the ground (no interface there).
+        """
+        out = np.ones(self.n, dtype=bool)
+        for idx, law in zip(self.groups, self.laws):
+            out[list(idx)] = bool(getattr(law, "clamp", True))
+        return out
+
     def law_of(self, j: int) -> AbstractContactLaw:
         """The (scalar) contact law of interface `j`."""
         for idx, law in zip(self.groups, self.laws):
@@ -226,12 +238,17 @@ class Stack(eqx.Module):
         `G = (F^el + F^damp) delta / F^el` for `delta > 0` (the unclamped force over the secant
         stiffness: a length, smooth through the force zero; `G = delta` for an elastic law), and
         `G = delta` otherwise. With the no-tension clamp the bodies separate at `G = 0` (force zero),
-        possibly at `delta > 0`. Used to locate the end of contacts.
+        possibly at `delta > 0`. Without it (`law.clamp=False`) the contact pulls until the overlap
+        closes, so `G = delta` on that interface. Used to locate the end of contacts.
         """
         el = self.elastic_forces(delta)
         fu = self.unclamped_forces(delta, delta_dot)
-        ok = (delta > 0) & (el > 0)
+        ok = (delta > 0) & (el > 0) & self.clamped()
         return jnp.where(ok, fu * delta / jnp.where(ok, el, 1.0), delta)
+
+    def in_contact(self, delta: Array, delta_dot: Array) -> Array:
+        """`(..., n)` booleans: the contact is closed (force > 0 if clamped, `delta > 0` if not)."""
+        return jnp.where(self.clamped(), self.forces(delta, delta_dot) > 0, delta > 0)
 
     def accelerations(self, forces: Array) -> Array:
         """`(..., n)` accelerations of the masses (m/s², upward) from the interface forces."""

@@ -48,11 +48,12 @@ def test_every_method_solved_with_finite_error(quick_run):
     assert case["ref"]["ok"] and case["ref"]["status"] == "cascade complete"
     assert set(case["methods"]) == set(METHODS)
     for method, rec in case["methods"].items():
-        common = [r for r in rec["ladder"] if r["rtol"] == 1e-8]
+        common = [r for r in rec["ladder"] if r["rtol"] == 1e-10]
         assert common and common[0]["ok"], method
         r = common[0]
-        # every solver at rtol = atol = 1e-8 lands within 1e-3 of the reference (measured 4e-8 .. 3e-6)
-        assert math.isfinite(r["err"]) and r["err"] < 1e-3, (method, r["err"])
+        # every solver at the library default rtol = atol = 1e-10 lands within 1e-6 of the reference
+        # (measured 1e-11 .. 2e-8): a loose bound, this is a structural check, not an accuracy benchmark
+        assert math.isfinite(r["err"]) and r["err"] < 1e-6, (method, r["err"])
         assert r["accepted"] > 0 and r["steps"] >= r["accepted"]
         assert math.isfinite(r["time"]) and r["time"] > 0
 
