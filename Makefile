@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test bench bench-smoke clean
+.PHONY: demo test bench bench-smoke notebooks clean
 
 $(STAMP): requirements.lock pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -19,8 +19,17 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(BIN)/python -m pytest -n 2 -q
 
+# Full benchmark suite (~15 min on 2 cores): writes benchmarks/results.md and the raw JSON.
 bench: $(STAMP)
-	$(BIN)/python benchmarks/run.py --output benchmarks/results.md
+	$(BIN)/python benchmarks/run.py --output benchmarks/results.md --json benchmarks/results.json
+
+# A one-minute smoke run (n = 2, one regime) into out/; CI runs the same through tests/test_benchmarks_smoke.py.
+bench-smoke: $(STAMP)
+	$(BIN)/python benchmarks/run.py --quick --output out/bench-smoke.md --json out/bench-smoke.json
+
+# Execute every notebook (full grids) into out/notebooks/*.ipynb, with outputs and figures.
+notebooks: $(STAMP)
+	$(BIN)/python notebooks/execute.py --force
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -28,17 +28,22 @@ solvers use `VeryChord`, which declares divergence after two iterations (fixed u
 `root_finder` instead.
 
 **Default tolerances** `rtol = atol = 1e-10` (scaled state) with `resolve_onsets=True` follow from the
-benchmark table (`benchmarks/results.md`, README) and from an error-distribution study. The table: at
-1e-10 Tsit5 gets the top mass's launch velocity within 1e-7 (relative) of a 1e-13 reference in every
-benchmarked regime (gapped Hertz/Tsuji, touching, e = 0.3, soft pad; n = 2..20); at the former 1e-8 the
-error was 1e-7 to 5e-5. Dopri8 is up to 1.6x faster for gapped stacks but slower for touching and damped
-ones, and Kvaerno5 is 10-30x slower everywhere, so Tsit5 is the default. The study: one case per regime
-hides a heavy tail. Over 100 gaps within 1e-11 of 1 cm (paper's six-mass MVG, 1e9 N/m^1.5, 1 m/s; error
-against Dopri8 at 1e-12), a step that straddles a contact onset is now and then accepted with a large
-error: without the onset proxy, Hertz at 1e-10 has median error 1.8e-8 but maximum 3.3e-7; with it,
-maximum 3.6e-10 (1.4x the steps). Tsuji (clamped): maximum 9.0e-7 -> 4.4e-7 at 1e-10 and 4.8e-8 ->
-2.0e-8 at 1e-11 (its `delta^{1/4}` damping and the clamp's release keep a tail that the proxy does not
-remove: ask for 1e-11 when a damped stack needs 1e-7 everywhere).
+benchmark table (`benchmarks/results.md`, README) and from an error-distribution study. The table's
+single solves (no onset proxy: the same equations as scipy; reference Dopri8 at 1e-13; n = 2, 5, 10, 20;
+gapped Hertz/Tsuji, touching, e = 0.3, soft pad): at 1e-10 Tsit5 puts the top mass's launch velocity
+within 1e-7 (relative) in 18 of 20 cases and misses by up to 3x in two (e = 0.3, n = 5: 2.6e-7; soft pad,
+n = 10: 3.0e-7); Dopri8 misses in one (soft pad, n = 20: 2.8e-7). At the former 1e-8 errors reached 5e-5.
+Neither explicit method dominates: summed over n at matched accuracy, Dopri8 is fastest for gapped Hertz
+(15 vs 24 ms), touching (16.4 vs 16.5) and e = 0.3 (28 vs 34), Tsit5 for gapped Tsuji (28 vs 33) and the
+soft pad (82 vs 114); Kvaerno5 is 35-70x slower (summed over n). Tsit5 stays the default because it wins where
+the stack is hardest (damped Tsuji contacts, stiffness contrast) and its error tail is tamed by the onset
+proxy; pass `solver="dopri8"` for undamped gapped stacks. The study: one case per regime hides a heavy
+tail. Over 100 gaps within 1e-11 of 1 cm (paper's six-mass MVG, 1e9 N/m^1.5, 1 m/s; error against Dopri8
+at 1e-12), a step that straddles a contact onset is now and then accepted with a large error: without the
+onset proxy, Hertz at 1e-10 has median error 1.8e-8 but maximum 3.3e-7; with it, maximum 3.6e-10 (1.4x the
+steps). Tsuji (clamped): maximum 9.0e-7 -> 4.4e-7 at 1e-10 and 4.8e-8 -> 2.0e-8 at 1e-11 (its
+`delta^{1/4}` damping and the clamp's release keep a tail that the proxy does not remove: ask for 1e-11
+when a damped stack needs 1e-7 everywhere).
 
 **Step control.** `PIDController(pcoeff=0.4, icoeff=0.3)` (Söderlind 2003; suits the non-smooth contact
 onset), and a largest step of `max_step` contact times (default 0.5) so that a free flight never steps
@@ -705,6 +710,10 @@ def launch_velocity(
     Tolerances default to `rtol = atol = 1e-11` with `resolve_onsets=True`, where gradients matched central
     finite differences to 3.5e-6 (module docstring). A failed solve raises an error at run time
     (`eqx.error_if`), never a silent NaN.
+
+    Cost (benchmarks/results.md, 2 CPU cores): for the gradient with respect to all n masses, forward mode
+    (`jax.jacfwd`, `adjoint="forward"`) costs 3.0x (n = 5) and 3.9x (n = 10) one solve, reverse mode
+    (`jax.grad`, checkpointed) 7.6x and 6.2x. Prefer forward mode for up to ~10 parameters.
     """
     tolerances = tolerances or Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True)
     _, t_max, cfg = _prepare(stack, state, None, t_max, solver, tolerances, max_steps, adjoint)

@@ -5,7 +5,8 @@
   Off by default, so running a notebook (or the tests) never rewrites the repository.
 * `HERTZ_CHAIN_FIG_DIR=/some/dir`: save every figure there as PNG. Off by default.
 
-Figures use the non-interactive Agg backend.
+Figures are shown inline in a Jupyter kernel (and saved when asked); as a plain script they use the
+non-interactive Agg backend and are only saved.
 """
 
 from __future__ import annotations
@@ -16,7 +17,19 @@ from pathlib import Path
 
 import matplotlib
 
-matplotlib.use("Agg")
+
+def _in_kernel() -> bool:
+    try:
+        from IPython import get_ipython
+    except ImportError:
+        return False
+    shell = get_ipython()
+    return shell is not None and hasattr(shell, "kernel")
+
+
+IN_KERNEL = _in_kernel()
+if not IN_KERNEL:
+    matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 QUICK = os.environ.get("HERTZ_CHAIN_QUICK", "") not in ("", "0")
@@ -37,10 +50,14 @@ TABLES = repo_root() / "data" / "tables"
 
 
 def show(fig, name: str) -> None:
-    """Save `fig` as `<FIG_DIR>/<name>.png` when asked, then close it."""
+    """Show `fig` inline (in a kernel), save it as `<FIG_DIR>/<name>.png` when asked, then close it."""
     if FIG_DIR:
         Path(FIG_DIR).mkdir(parents=True, exist_ok=True)
         fig.savefig(Path(FIG_DIR) / f"{name}.png", dpi=120, bbox_inches="tight")
+    if IN_KERNEL:
+        from IPython.display import display
+
+        display(fig)
     plt.close(fig)
 
 
