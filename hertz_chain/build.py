@@ -110,13 +110,17 @@ def _stiffness(spec: StackSpec, cs: ContactSpec, j: int, n: int) -> float:
     return contact_stiffness(pair[0], pair[1], R1, None if math.isinf(R2) else R2)
 
 
-def _nominal_e(cs: ContactSpec) -> float:
+def _nominal_e(cs: ContactSpec, m_eff: float) -> float:
     if cs.law == "hertz":
         return 1.0
     if cs.restitution is not None:
         return cs.restitution
     if cs.law == "tsuji" and cs.damping is not None:
         return calibration.tsuji_restitution(cs.damping, clamp=cs.clamp)
+    if cs.law == "kelvin-voigt" and cs.damping is not None and cs.stiffness is not None:
+        # linear spring-dashpot: e depends only on zeta = c / (2 sqrt(m* k)), not on the speed
+        zeta = cs.damping / (2.0 * math.sqrt(m_eff * cs.stiffness))
+        return max(0.0, calibration.kelvin_voigt_restitution(zeta, clamp=cs.clamp))  # overdamped: ~-1e-16
     return math.nan  # speed-dependent or given by a raw parameter
 
 
@@ -154,7 +158,7 @@ def _build(spec: StackSpec) -> Built:
     specs = {j: spec.contact_for(j) for j in interfaces}
     e_nom = np.full(n, math.nan)
     for j, cs in specs.items():
-        e_nom[j] = _nominal_e(cs)
+        e_nom[j] = _nominal_e(cs, m[0] if j == 0 else m[j - 1] * m[j] / (m[j - 1] + m[j]))
     speeds = _approach_speeds(m, e_nom, ground, v0)
     laws: list[AbstractContactLaw | None] = [None] * n
     for j, cs in specs.items():

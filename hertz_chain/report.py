@@ -78,6 +78,20 @@ def _nums(a):
     return [_num(x) for x in np.asarray(a, dtype=float).ravel()]
 
 
+def _pulse_dict(pm) -> dict | None:
+    if pm is None:
+        return None  # a mass that felt no contact
+    return {
+        "peak_g": pm.peak_g,
+        "time_of_peak_s": pm.time_of_peak,
+        "duration_ms": pm.duration_10 * 1e3,
+        "rise_time_ms": pm.rise_time * 1e3,
+        "delta_v_mps": pm.delta_v_main,
+        "equivalent_half_sine_ms": pm.equivalent_half_sine_duration * 1e3,
+        "n_pulses": pm.n_pulses,
+    }
+
+
 def to_dict(report: Report) -> dict:
     """The report as plain JSON-ready data (SI units; `null` for undefined values)."""
     top = report.top_pulse
@@ -114,15 +128,8 @@ def to_dict(report: Report) -> dict:
             }
             for ep in report.episodes
         ],
-        "top_pulse": None if top is None else {
-            "peak_g": top.peak_g,
-            "time_of_peak_s": top.time_of_peak,
-            "duration_ms": top.duration_10 * 1e3,
-            "rise_time_ms": top.rise_time * 1e3,
-            "delta_v_mps": top.delta_v_main,
-            "equivalent_half_sine_ms": top.equivalent_half_sine_duration * 1e3,
-            "n_pulses": top.n_pulses,
-        },
+        "top_pulse": _pulse_dict(top),
+        "pulses": [_pulse_dict(pm) for pm in report.pulses],  # every mass, bottom first
         "top_srs": None if srs is None else {
             "Q": srs.Q,
             "frequencies_Hz": _nums(srs.frequencies_Hz),
@@ -230,6 +237,12 @@ def to_dataset(report: Report):
         "velocity_gain": (("mass",), report.velocity_gains, {"units": "1"}),
         "restitution_measured": (("interface",), report.restitution, {"units": "1"}),
     }
+    pulse_fields = (("pulse_peak_g", "peak_g", "g"), ("pulse_duration", "duration_10", "s"),
+                    ("pulse_rise_time", "rise_time", "s"), ("pulse_delta_v", "delta_v_main", "m/s"),
+                    ("pulse_half_sine_duration", "equivalent_half_sine_duration", "s"))
+    for name, field, unit in pulse_fields:  # every mass's main pulse; NaN for a mass without contact
+        values = [np.nan if pm is None else float(getattr(pm, field)) for pm in report.pulses]
+        data[name] = (("mass",), np.asarray(values), {"units": unit})
     if report.rigid.nominal_restitution is not None:
         data["restitution_nominal"] = (("interface",), report.rigid.nominal_restitution, {"units": "1"})
     coords = {"time": ("time", st.t, {"units": "s"}), "mass": mass, "interface": interface}

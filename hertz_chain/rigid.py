@@ -94,20 +94,24 @@ def _show(x):
     return x.item() if x.size == 1 else x.tolist() if x.size <= 8 else f"array of shape {x.shape}"
 
 
-def _check_e(x, name: str = "e") -> np.ndarray:
+def _check_e(x, name: str = "e", *, allow_zero: bool = True) -> np.ndarray:
+    """A pair's coefficient of restitution: `[0, 1]` (0 = perfectly plastic: the pair moves on together),
+    or `(0, 1]` where a formula needs `e > 0` (the MET ratios, Eq 27, vanish at `e = 0`)."""
     x = _arr(x)
     _check_finite(name, x)
-    if not np.all((x > 0) & (x <= 1)):
-        raise ParameterError(name, _show(x), "coefficient of restitution must lie in (0, 1]")
+    ok = (x >= 0) if allow_zero else (x > 0)
+    if not np.all(ok & (x <= 1)):
+        allowed = "[0, 1]" if allow_zero else "(0, 1] (the MET ratios of Eq 27 vanish at e = 0)"
+        raise ParameterError(name, _show(x), f"coefficient of restitution must lie in {allowed}")
     return x
 
 
 def _check_ground_e(x, name: str = "ground_restitution") -> np.ndarray:
     x = _arr(x)
     _check_finite(name, x)
-    if not np.all(x > 0):
+    if not np.all(x >= 0):
         raise ParameterError(
-            name, _show(x), "ground restitution e_{1,0} must be > 0 (values > 1 model an 'active ground', Eq 19)"
+            name, _show(x), "ground restitution e_{1,0} must be >= 0 (values > 1 model an 'active ground', Eq 19)"
         )
     return x
 
@@ -177,7 +181,7 @@ def impact_velocities(m1, m2, v1, v2, e):
 
     `V1 = v1 + m2 (1+e)(v2 − v1)/(m1 + m2)`, `V2 = v2 − m1 (1+e)(v2 − v1)/(m1 + m2)`.
 
-    Broadcasts over arrays. `e` in (0, 1]; masses > 0. No check that the bodies approach (the
+    Broadcasts over arrays. `e` in [0, 1]; masses > 0. No check that the bodies approach (the
     event simulator does that).
     """
     m1, m2 = _check_positive(m1, "m1"), _check_positive(m2, "m2")
@@ -523,7 +527,7 @@ def met_ratios(e, n: int):
     tending to `e` as `i → ∞` (Eq 28). Computed from Eq 27 (Eq 26 where `e = 1`). Assumes the same
     `e` at the ground and at every pair.
     """
-    e = _check_e(e)[..., None]
+    e = _check_e(e, allow_zero=False)[..., None]
     n = int(_check_n(n))
     i = np.arange(1, n, dtype=float)
     with np.errstate(invalid="ignore", divide="ignore"):

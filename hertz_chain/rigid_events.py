@@ -14,7 +14,7 @@ ground–mass 1, interface `j` = mass `j` – mass `j+1` (array indices `j−1`,
 * *Restitution.* `restitution` is a scalar or an `(n,)` array over interfaces 0..n−1. The ground exists
   if and only if `ground_restitution` is given; it then is the ground's restitution (it may exceed 1,
   an 'active ground', Eq 19) and entry 0 of `restitution` is never used. Pair restitutions lie in
-  `(0, 1]`.
+  `[0, 1]` (0: perfectly plastic, the pair moves on together).
 * *Order.* The next event is the earliest predicted contact. Contacts whose times agree within a
   relative tolerance (`1e-12`·t) count as simultaneous and the lowest interface goes first; the
   others follow as separate binary impacts at the same instant (so a touching stack, zero gaps, is
@@ -146,8 +146,8 @@ def simulate_rigid(
     Parameters (SI): `masses` `(n,)` kg, bottom first, `> 0`; `velocities` `(n,)` m/s upward-positive;
     `gaps` `(n,)` m, `>= 0`: `gaps[0]` the height of mass 1 above the ground (ignored without a
     ground), `gaps[j]` the gap between masses `j` and `j+1`; `restitution` scalar or `(n,)` over
-    interfaces (entry 0 unused, see the module rules), each in `(0, 1]`; `ground_restitution`: None
-    (no ground) or `> 0` (may exceed 1); `gravity` `>= 0` m/s², acting downward; `t_max` s;
+    interfaces (entry 0 unused, see the module rules), each in `[0, 1]` (0: perfectly plastic); `ground_restitution`: None
+    (no ground) or `>= 0` (may exceed 1); `gravity` `>= 0` m/s², acting downward; `t_max` s;
     `max_collisions` a positive integer.
 
     Each impact uses Eqs 1–2 of the seed paper (ground: `V_1 = −e_{1,0} v_1`). Contact times are exact
@@ -176,13 +176,13 @@ def simulate_rigid(
     if e_arr.shape != (n,):
         raise ParameterError("restitution", restitution, f"must be a scalar or {n} values over interfaces 0..n-1")
     e_pair = e_arr[1:]
-    if not np.all(np.isfinite(e_pair) & (e_pair > 0) & (e_pair <= 1)):
-        raise ParameterError("restitution", e_arr.tolist(), "pair restitution must lie in (0, 1]")
+    if not np.all(np.isfinite(e_pair) & (e_pair >= 0) & (e_pair <= 1)):
+        raise ParameterError("restitution", e_arr.tolist(), "pair restitution must lie in [0, 1]")
     ground = ground_restitution is not None
     if ground:
         e0 = float(ground_restitution)
-        if not (np.isfinite(e0) and e0 > 0):
-            raise ParameterError("ground_restitution", ground_restitution, "must be > 0 (may exceed 1) or None")
+        if not (np.isfinite(e0) and e0 >= 0):
+            raise ParameterError("ground_restitution", ground_restitution, "must be >= 0 (may exceed 1) or None")
     else:
         e0 = np.nan
         gp[0] = np.nan

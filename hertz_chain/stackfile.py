@@ -75,7 +75,7 @@ rtol = 1e-10
 | **`[contact]`**, `[contact.ground]`, `[[contact.interface]]` | | |
 | `law` | `"hertz"`, `"hunt-crossley"`, `"tsuji"`, `"kelvin-voigt"`, `"viscoelastic"` | required in `[contact]` |
 | `stiffness` | N/m^1.5 (Hertzian laws) or N/m (`kelvin-voigt`), > 0 | from materials and geometry |
-| `restitution` | e ∈ (0, 1]; ground: e > 0 | one of restitution / alpha / damping |
+| `restitution` | e ∈ (0, 1] (ground too: a contact law is passive) | one of restitution / alpha / damping |
 | `chi_map` | `hunt-crossley` only: `"hunt-crossley"`, `"herbert-mcwhannell"`, `"lankarani-nikravesh"`, `"gonthier"`, `"flores"`, `"hu-guo"`, `"zhiying-qishao"`, `"exact"` | `"exact"` |
 | `calibration_velocity` | velocity > 0 (`hunt-crossley`, `viscoelastic` with restitution) | builder's choice (see below) |
 | `alpha` | s/m ≥ 0 (`hunt-crossley`) | none |
@@ -119,8 +119,9 @@ Damping per law: `hertz` has none (elastic); `hunt-crossley` takes `alpha`, or `
 take `restitution` or `damping` (their restitution does not depend on the impact velocity);
 `viscoelastic` takes `restitution` (with an optional `calibration_velocity`) or `damping` (= A).
 `calibration_velocity` unset (`None`) leaves the choice to the builder (the approach speed that the
-rigid model predicts for that interface). Keys that a law does not use are errors. The ground's
-restitution may exceed 1 (an apparent restitution, e.g. a driven anvil); an interface's is in (0, 1].
+rigid model predicts for that interface). Keys that a law does not use are errors. Every
+restitution, the ground's included, is in (0, 1]: a contact law is passive. An "active ground"
+(e_{1,0} > 1, paper Eq 19) exists only in the rigid model (`stack_gain`, `simulate_rigid`).
 
 ```toml
 [contact]
@@ -786,10 +787,9 @@ def _resolve_contact(merged: dict, label: str, *, ground: bool) -> ContactSpec:
     if "restitution" in merged:
         raw, key = merged["restitution"]
         restitution = parse_quantity(raw, "dimensionless", key)
-        if ground:
-            _check(restitution > 0, key, raw, "the ground restitution must be > 0")
-        else:
-            _check(0 < restitution <= 1, key, raw, "must be in (0, 1]")
+        _check(0 < restitution <= 1, key, raw,
+               "must be in (0, 1] (a contact law is passive; e > 1, an 'active ground', is rigid-model only)"
+               if ground else "must be in (0, 1]")
     alpha = None
     if "alpha" in merged:
         raw, key = merged["alpha"]

@@ -220,7 +220,7 @@ for ax, (name, r) in zip(axs, reports.items()):
     ax.set_xlim(0, min(st.t[-1], 25e-3) * 1e3)
 axs[-1].set_xlabel("t (ms)")
 axs[0].legend(fontsize=7, ncol=3)
-fig.suptitle("Contact forces of the six-mass MVG stack: all at once (touching), partly overlapping, sequential")
+fig.suptitle("Contact forces of the six-mass MVG stack: all at once (touching), partly overlapping, sequential\n(no paper figure: the paper has no compliant model)")
 fig.tight_layout()
 show(fig, "hertz_contact_forces_three_regimes")
 

@@ -172,7 +172,7 @@ for name in hc.CHI_MAPS:
     produced = calibration.restitution_from_chi(np.array([hc.chi_from_restitution(t, name) for t in tg]))
     ax.plot(tg, produced, lw=1.5 if name == "exact" else 1, ls="-" if name == "exact" else "--", label=name)
 ax.set(xlabel="target e", ylabel="e actually produced (exact map)",
-       title="Hunt–Crossley χ(e) maps: the e they produce (references.md values reproduced)")
+       title="Hunt–Crossley χ(e) maps: the e they produce (no paper figure; references.md values reproduced)")
 ax.legend(fontsize=7)
 show(fig, "contact_chi_maps")
 
@@ -253,8 +253,8 @@ for i, (name, law) in enumerate(laws.items()):
     axs[0].plot(st.t * 1e3, f / 1e3, color=f"C{i}", label=f"{name}: e = {res.e:.3f}, t_c = {res.contact_time * 1e3:.3f} ms")
     axs[1].plot(st.overlaps[:, 0] * 1e6, f / 1e3, color=f"C{i}", label=name)
 axs[0].set(xlabel="t (ms)", ylabel=f"contact force (kN) = acceleration × {M:g} kg",
-           title="Force (acceleration) pulse of one impact, v = 1 m/s, m* = 1 kg")
-axs[1].set(xlabel="overlap δ (µm)", ylabel="contact force (kN)", title="Force against overlap (hysteresis loops)")
+           title="Force (acceleration) pulse of one impact, v = 1 m/s, m* = 1 kg (no paper figure)")
+axs[1].set(xlabel="overlap δ (µm)", ylabel="contact force (kN)", title="Force against overlap (hysteresis loops; no paper figure)")
 axs[0].legend(fontsize=7)
 axs[1].legend(fontsize=7)
 show(fig, "contact_pulse_shapes")

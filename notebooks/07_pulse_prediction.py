@@ -208,7 +208,7 @@ axs[0].legend(fontsize=8)
 axs[1].loglog(FREQ, srs_ex, "k", lw=1.5, label=f"predicted pulse: {p.peak_g:,.0f} g, {p.duration_10 * 1e3:.3f} ms")
 for (s, c), col in ((("MIL-STD-883 M2002", "A"), "C0"), (("MIL-STD-883 M2002", "B"), "C1"), (("MIL-STD-883 M2002", "E"), "C3")):
     axs[1].loglog(FREQ, HS_SRS[(s, c)], "--", color=col, lw=1, label=f"{s} {c} half-sine")
-axs[1].set(xlabel="natural frequency (Hz)", ylabel="maximax SRS, Q = 10 (g)", title="SRS against test conditions")
+axs[1].set(xlabel="natural frequency (Hz)", ylabel="maximax SRS, Q = 10 (g)", title="SRS against test conditions (no paper figure)")
 axs[1].legend(fontsize=7)
 show(fig, "pulse_example_file_srs")
 
@@ -395,13 +395,13 @@ for s, c, A, D, _ in LEVELS:
                 textcoords="offset points")
 ax.loglog(p.equivalent_half_sine_duration * 1e3, p.peak_g, "k*", ms=10, label="examples/steel_materials.toml (10 cm)")
 ax.set(xlabel="equivalent half-sine duration (ms)", ylabel="peak (g)",
-       title="Predicted top pulses vs test conditions (▼ MIL-STD-883 M2002, ▲ JESD22-B110)")
+       title="Predicted top pulses vs test conditions (▼ MIL-STD-883 M2002, ▲ JESD22-B110; no paper figure)")
 ax.legend(fontsize=7, loc="lower left")
 ax = axs[1]
 ax.loglog(FREQ, r02["srs"], "C1", lw=1.5, label="MVG6 nylon cap, 0.2 m")
 ax.loglog(FREQ, s02["srs"], "C0", lw=1.5, label="MVG6 all steel, 0.2 m")
 ax.loglog(FREQ, HS_SRS[("MIL-STD-883 M2002", "E")], "k--", lw=1, label="MIL-STD-883 E half-sine (10,000 g, 0.2 ms)")
-ax.set(xlabel="natural frequency (Hz)", ylabel="maximax SRS, Q = 10 (g)", title="SRS at 0.2 m drop against condition E")
+ax.set(xlabel="natural frequency (Hz)", ylabel="maximax SRS, Q = 10 (g)", title="SRS at 0.2 m drop against condition E (no paper figure)")
 ax.legend(fontsize=8)
 show(fig, "pulse_mvg6_steel_vs_conditions")
 

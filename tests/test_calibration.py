@@ -137,6 +137,19 @@ def test_each_map_by_dimensional_integration(name):
         assert e == pytest.approx(cal.chi_map_table((target,), (name,))[name][target], abs=1e-9)
 
 
+def test_zhiying_qishao_map_by_dimensional_integration():
+    """No published table gives the e that the Zhiying-Qishao map chi = 3(1 - e^2) exp(2(1 - e))/4
+    (references.md, as quoted by Flores et al. 2011) really produces, so it is checked two independent
+    ways: the chi from the formula, fed to the exact Lambert-W relation (Carvalho & Martins 2019, tested
+    above), against a scipy integration of the Hunt-Crossley impact with that chi."""
+    for target in (0.5, 0.9):
+        chi = 0.75 * (1 - target**2) * math.exp(2 * (1 - target))
+        assert cal.CHI_MAPS["zhiying-qishao"](target) == pytest.approx(chi, rel=1e-15)
+        law = make_law("hunt-crossley", stiffness=K_HERTZ, restitution=target, calibration_velocity=V,
+                       chi_map="zhiying-qishao")
+        assert measured_e("hunt-crossley", law) == pytest.approx(cal.restitution_from_chi(chi), abs=1e-9)
+
+
 @pytest.mark.parametrize("clamp", [True, False])
 def test_hunt_crossley_force_never_tensile(clamp):
     # u = 1 + alpha d' obeys u' = -(alpha k/m) d^{3/2} u, so u(t) = (1 + alpha v) exp(-(alpha k/m)∫d^{3/2})

@@ -45,6 +45,9 @@ def test_normative_example_json_contract(normative_json):
     assert d["top_velocity_gain"] == pytest.approx(g, rel=1e-6)
     assert d["rigid"]["nominal_gain"] == pytest.approx(g, rel=1e-12)
     assert d["velocity_gains"][-1] == d["top_velocity_gain"]
+    assert len(d["pulses"]) == 6 and d["pulses"][-1] == d["top_pulse"]  # every mass, bottom first
+    # the top mass's one pulse takes it from -v_ff to G v_ff (Eq 19): delta V = (G + 1) v_ff, v_ff = 1 m/s
+    assert d["top_pulse"]["delta_v_mps"] == pytest.approx(g + 1, rel=1e-6)
     assert d["energy_error"] < 1e-5
 
 
@@ -58,6 +61,11 @@ def test_outputs_and_no_overwrite(tmp_path):
     ds = xr.open_dataset(nc, engine="h5netcdf")
     assert ds["velocity"].attrs["units"] == "m/s" and ds["time"].attrs["units"] == "s"
     assert ds.sizes["mass"] == 6
+    # per-mass pulse metrics; the top one goes from -v_ff to G v_ff (Eq 19): delta V = (G + 1) v_ff
+    g = eq19([8.4, 3.4683, 1.4320, 0.5913, 0.2441, 0.1008], 0.8)
+    assert ds["pulse_delta_v"].attrs["units"] == "m/s"
+    assert float(ds["pulse_delta_v"][-1]) == pytest.approx(g + 1, rel=1e-6)
+    assert np.all(np.isfinite(ds["pulse_peak_g"].values))  # every mass is struck
     ds.close()
     res = runner.invoke(app, ["simulate", str(NORMATIVE), "--output", str(csv)])
     assert res.exit_code == 0

@@ -401,7 +401,7 @@ def test_design_ratios_vectorised_matches_scalar_design():
     "call, name",
     [
         (lambda: rigid.mvg_gain(0.012, 1.2, 6), "e"),
-        (lambda: rigid.mvg_gain(0.012, 0.0, 6), "e"),
+        (lambda: rigid.mvg_gain(0.012, -0.1, 6), "e"),
         (lambda: rigid.mvg_gain(1.5, 0.8, 6), "R"),
         (lambda: rigid.mvg_gain(0.0, 0.8, 6), "R"),
         (lambda: rigid.mvg_gain(0.012, 0.8, 1), "n"),
@@ -423,6 +423,18 @@ def test_bad_input_raises_parameter_error_naming_the_parameter(call, name):
     with pytest.raises(ParameterError, match=rf"^{name} = ") as info:
         call()
     assert info.value.name == name
+
+
+def test_perfectly_plastic_pair_moves_on_together():
+    """e = 0 is a valid restitution (Eq 2 with V2 = V1): momentum (Eq 1) then gives the common velocity
+    (m1 v1 + m2 v2)/(m1 + m2). The MET ratios (Eq 27) vanish at e = 0, so MET rejects it by name."""
+    V1, V2 = rigid.impact_velocities(3.0, 1.0, 2.0, -1.0, 0.0)
+    assert V1 == pytest.approx(1.25, rel=1e-15) and V2 == pytest.approx(1.25, rel=1e-15)
+    # Eq 19 with e_{1,0} = 0: mass 1 stops on the ground and mass 2 (falling at -1) hits it at rest:
+    # V2 = -1 + (1 + e)(1)/(1 + r) -> with e = 0.8, r = m2/m1 = 0.1: -1 + 1.8/1.1
+    assert rigid.stack_gain([1.0, 0.1], 0.8, ground_restitution=0.0) == pytest.approx(1.8 / 1.1 - 1, rel=1e-14)
+    with pytest.raises(ParameterError, match=r"^e = .*MET ratios"):
+        rigid.met_ratios(0.0, 5)
 
 
 def test_active_ground_allowed():

@@ -188,7 +188,7 @@ def test_inelastic_collapse_stops_with_a_clear_error():
         (dict(velocities=[1.0]), "velocities"),
         (dict(gaps=[0.0, -0.1]), "gaps"),
         (dict(restitution=1.2), "restitution"),
-        (dict(restitution=0.0), "restitution"),
+        (dict(restitution=-0.1), "restitution"),
         (dict(ground_restitution=-0.5), "ground_restitution"),
         (dict(gravity=-9.8), "gravity"),
         (dict(max_collisions=0), "max_collisions"),
@@ -207,3 +207,11 @@ def test_active_ground_is_allowed():
     m = rigid.mvg_masses(0.05, 4)
     r = simulate_rigid(m, -np.ones(4), np.r_[0.0, np.full(3, 1e-2)], 0.8, ground_restitution=1.5)
     assert r.gain == pytest.approx(_eq19_by_hand(m, np.full(4, 0.8), 1.5), rel=1e-12)
+
+
+def test_perfectly_plastic_impact_sticks():
+    """e = 0 (Eq 2 with V2 = V1): a 3 kg mass at 2 m/s strikes a 1 kg mass at rest 1 cm away; momentum
+    (Eq 1) gives both 1.5 m/s, and the pair then moves together, never approaching: one impact."""
+    r = simulate_rigid([3.0, 1.0], [2.0, 0.0], [0.0, 0.01], 0.0)  # no ground: gaps[0] unused
+    assert r.n_collisions == 1
+    np.testing.assert_allclose(r.final_velocities, [1.5, 1.5], rtol=1e-15)

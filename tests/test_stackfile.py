@@ -201,11 +201,18 @@ def test_explicit_velocities_with_ground():
 
 
 def test_ground_override_inherits_from_the_default():
-    spec = parse_stack(patched({"contact.ground": {"restitution": 1.2, "stiffness": "4 GN/m^1.5"}}))
+    spec = parse_stack(patched({"contact.ground": {"restitution": 0.6, "stiffness": "4 GN/m^1.5"}}))
     g = spec.contact_for(0)
-    assert (g.law, g.restitution, g.source) == ("tsuji", 1.2, "contact.ground")  # ground e may exceed 1
+    assert (g.law, g.restitution, g.source) == ("tsuji", 0.6, "contact.ground")
     assert close(g.stiffness, 4e9)
     assert spec.contact_for(1).restitution == 0.8 and spec.contact_for(1).stiffness == 1e9
+
+
+def test_ground_contact_cannot_be_active():
+    """A contact law is passive (it returns at most the energy stored), so its restitution is <= 1; the
+    paper's active ground e_{1,0} > 1 (Eq 19) exists only in the rigid model."""
+    assert_one_line_error(patched({"contact.ground": {"restitution": 1.2}}), "contact.ground.restitution",
+                          "1.2", "(0, 1]", "rigid-model only")
 
 
 def test_override_with_another_law_starts_afresh_except_clamp():
@@ -546,7 +553,7 @@ BAD = [
     ({"contact.restitution": 0}, "contact.restitution", ["(0, 1]"]),
     ({"contact.restitution": 1.01}, "contact.restitution", ["(0, 1]"]),
     ({"contact.restitution": "0.8 m"}, "contact.restitution", ["a plain number"]),
-    ({"contact.ground": {"restitution": 0}}, "contact.ground.restitution", ["> 0"]),
+    ({"contact.ground": {"restitution": 0}}, "contact.ground.restitution", ["(0, 1]"]),
     # kinds of values
     ({"drop": 5}, "drop", ["expected a table"]),
     ({"title": 5}, "title", ["not a string"]),
