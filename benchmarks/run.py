@@ -183,43 +183,51 @@ def batch_bench(sizes, quick: bool) -> dict:
 # ============================================================================ (4) gradients
 def grad_bench(sizes, quick: bool) -> list[dict]:
     """`jax.grad` of the top launch velocity w.r.t. all masses vs one forward solve, both compiled
-    (`jax.jit`), with `launch_velocity`'s defaults (rtol = atol = 1e-11, resolve_onsets)."""
+    (`jax.jit`), with `launch_velocity`'s defaults (rtol = atol = 1e-11, resolve_onsets). Accuracy
+    against central differences of a reference solve at rtol = atol = 1e-13 (h = 1e-4 m_i: the
+    reference's error over h is ~1e-8, so the differences measure the gradient, not the noise)."""
     rows = []
-    for n in sizes:
-        stack, state = cases.build(n, "gapped-tsuji")
-        laws, gaps = [stack.law_of(j) for j in stack.interfaces], np.diff(np.asarray(state.positions))
-        tol = hc.Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True)
-        probe = hc.simulate(stack, state, tolerances=tol, max_steps=65536)
-        ms = 1 << int(math.ceil(math.log2(1.25 * probe.num_steps)))  # checkpoints = max_steps: keep it tight
+    regimes = ("gapped-tsuji",) if quick else ("gapped-tsuji", "gapped-hertz")
+    for regime in regimes:
+        for n in sizes:
+            stack, state = cases.build(n, regime)
+            laws, gaps = [stack.law_of(j) for j in stack.interfaces], np.diff(np.asarray(state.positions))
+            tol = hc.Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True)
+            ref_tol = hc.Tolerances(rtol=1e-13, atol=1e-13, resolve_onsets=True)
+            probe = hc.simulate(stack, state, tolerances=tol, max_steps=65536)
+            ms = 1 << int(math.ceil(math.log2(1.25 * probe.num_steps)))  # checkpoints = max_steps: keep it tight
 
-        def top(m, adjoint="reverse"):
-            s = hc.Stack(m, laws, gravity=0.0)
-            return hc.launch_velocity(s, hc.at_impact(s, cases.V_IMPACT, gaps), tolerances=tol, max_steps=ms,
-                                      adjoint=adjoint)[-1]
+            def top(m, adjoint="reverse", tol=tol, ms=ms):
+                s = hc.Stack(m, laws, gravity=0.0)
+                return hc.launch_velocity(s, hc.at_impact(s, cases.V_IMPACT, gaps), tolerances=tol,
+                                          max_steps=ms, adjoint=adjoint)[-1]
 
-        m0 = jnp.asarray(stack.masses)
-        fwd = jax.jit(top)
-        grad = jax.jit(jax.grad(top))
-        jacf = jax.jit(jax.jacfwd(lambda m: top(m, "forward")))
-        reps = 3 if quick else 9
-        t_c = time.perf_counter(); jax.block_until_ready(grad(m0)); c_grad = time.perf_counter() - t_c  # noqa: E702
-        t_fwd = median_time(lambda: jax.block_until_ready(fwd(m0)), reps)
-        t_grad = median_time(lambda: jax.block_until_ready(grad(m0)), reps)
-        t_jacf = math.nan if quick else median_time(lambda: jax.block_until_ready(jacf(m0)), reps)
-        g_r = np.asarray(grad(m0))
-        g_f = g_r * math.nan if quick else np.asarray(jacf(m0))
-        fd = []  # central differences, h = 1e-5 m_i (independent check of the gradient's accuracy)
-        for i in range(n):
-            h = 1e-5 * float(m0[i])
-            e = jnp.zeros(n).at[i].set(h)
-            fd.append((float(fwd(m0 + e)) - float(fwd(m0 - e))) / (2 * h))
-        fd = np.asarray(fd)
-        rows.append(dict(n=n, steps=probe.num_steps, max_steps=ms, forward_ms=1e3 * t_fwd, grad_ms=1e3 * t_grad,
-                         jacfwd_ms=1e3 * t_jacf, grad_ratio=t_grad / t_fwd, jacfwd_ratio=t_jacf / t_fwd,
-                         grad_compile_s=c_grad,
-                         rev_vs_fwd_rel=float(np.max(np.abs(g_r - g_f)) / np.max(np.abs(g_f))),
-                         rev_vs_fd_rel=float(np.max(np.abs(g_r - fd)) / np.max(np.abs(fd)))))
-        log(f"  grad n={n}: {rows[-1]}")
+            m0 = jnp.asarray(stack.masses)
+            fwd = jax.jit(top)
+            ref = jax.jit(lambda m: top(m, "forward", ref_tol, 65536))
+            grad = jax.jit(jax.grad(top))
+            jacf = jax.jit(jax.jacfwd(lambda m: top(m, "forward")))
+            reps = 3 if quick else 9
+            t_c = time.perf_counter(); jax.block_until_ready(grad(m0)); c_grad = time.perf_counter() - t_c  # noqa: E702
+            t_fwd = median_time(lambda: jax.block_until_ready(fwd(m0)), reps)
+            t_grad = median_time(lambda: jax.block_until_ready(grad(m0)), reps)
+            t_jacf = math.nan if quick else median_time(lambda: jax.block_until_ready(jacf(m0)), reps)
+            g_r = np.asarray(grad(m0))
+            g_f = g_r * math.nan if quick else np.asarray(jacf(m0))
+            fd = []  # central differences of the reference solve (independent check of the accuracy)
+            for i in range(n):
+                h = 1e-4 * float(m0[i])
+                e = jnp.zeros(n).at[i].set(h)
+                fd.append((float(ref(m0 + e)) - float(ref(m0 - e))) / (2 * h))
+            fd = np.asarray(fd)
+            scale = np.max(np.abs(fd))
+            rows.append(dict(regime=regime, n=n, steps=probe.num_steps, max_steps=ms, forward_ms=1e3 * t_fwd,
+                             grad_ms=1e3 * t_grad, jacfwd_ms=1e3 * t_jacf, grad_ratio=t_grad / t_fwd,
+                             jacfwd_ratio=t_jacf / t_fwd, grad_compile_s=c_grad,
+                             rev_vs_fwd_rel=float(np.max(np.abs(g_r - g_f)) / scale),
+                             rev_vs_fd_rel=float(np.max(np.abs(g_r - fd)) / scale),
+                             fwd_vs_fd_rel=float(np.max(np.abs(g_f - fd)) / scale)))
+            log(f"  grad {regime} n={n}: {rows[-1]}")
     return rows
 
 
@@ -310,11 +318,11 @@ def targets(results, batch, grads, comp) -> list[dict]:
                          goal="<= 0.5 ms/design", value=f"{val:.3f} ms", met=val <= 0.5,
                          note="best of simulate_batch / vmap / vmap split over both cores"))
     for g in grads or []:
-        rows.append(dict(target=f"jax.grad of top launch velocity w.r.t. {g['n']} masses",
+        rows.append(dict(target=f"jax.grad of top launch velocity w.r.t. {g['n']} masses ({g.get('regime', 'gapped-tsuji')})",
                          goal="<= 5x one solve", value=f"{g['grad_ratio']:.1f}x", met=g["grad_ratio"] <= 5,
                          note=f"{g['grad_ms']:.1f} ms vs {g['forward_ms']:.1f} ms (both jitted)"))
         if math.isfinite(g["jacfwd_ratio"]):
-            rows.append(dict(target=f"same gradient by forward mode (jax.jacfwd, adjoint='forward'), {g['n']} masses",
+            rows.append(dict(target=f"same gradient by forward mode (jax.jacfwd, adjoint='forward'), {g['n']} masses ({g.get('regime', 'gapped-tsuji')})",
                              goal="<= 5x one solve", value=f"{g['jacfwd_ratio']:.1f}x", met=g["jacfwd_ratio"] <= 5,
                              note=f"{g['jacfwd_ms']:.1f} ms; alternative to jax.grad for n parameters"))
     for label, c in (comp or {}).get("cli", {}).items():
@@ -485,16 +493,19 @@ def markdown(data: dict) -> str:
 
     if data.get("grads"):
         L += ["## Gradient cost", "",
-              "Gapped Tsuji stack, `launch_velocity` defaults (rtol = atol = 1e-11, `resolve_onsets=True`). forward: "
+              "`launch_velocity` defaults (rtol = atol = 1e-11, `resolve_onsets=True`). forward: "
               "`jax.jit` of the top launch velocity as a function of the masses; grad: `jax.jit(jax.grad(...))` "
-              "(reverse mode, `RecursiveCheckpointAdjoint`); jacfwd: `adjoint=\"forward\"` with `jax.jacfwd`. rev vs fwd / FD: "
-              "max |difference| / max |gradient| against forward mode and central differences (h = 1e-5 m_i).", "",
-              "| n | steps | max_steps | forward ms | grad ms | grad / forward | jacfwd ms | jacfwd / forward | grad compile s | rev vs fwd | rev vs FD |",
-              "|---|---|---|---|---|---|---|---|---|---|---|"]
+              "(reverse mode, `RecursiveCheckpointAdjoint`); jacfwd: `adjoint=\"forward\"` with `jax.jacfwd`. "
+              "rev vs fwd, rev / fwd vs FD: max |difference| / max |FD gradient|, FD = central differences "
+              "(h = 1e-4 m_i) of a reference solve at rtol = atol = 1e-13. The solver controls the error of the "
+              "solution, not of its derivative: Tsuji's `delta^{1/4}` damping has an unbounded derivative at "
+              "contact onset, so its gradient converges more slowly than Hertz's as the tolerance is tightened.", "",
+              "| regime | n | steps | max_steps | forward ms | grad ms | grad / forward | jacfwd ms | jacfwd / forward | grad compile s | rev vs fwd | rev vs FD | fwd vs FD |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
         for g in data["grads"]:
-            L.append(f"| {g['n']} | {g['steps']} | {g['max_steps']} | {g['forward_ms']:.2f} | {g['grad_ms']:.2f} | "
+            L.append(f"| {g.get('regime', 'gapped-tsuji')} | {g['n']} | {g['steps']} | {g['max_steps']} | {g['forward_ms']:.2f} | {g['grad_ms']:.2f} | "
                      f"{g['grad_ratio']:.2f} | {g['jacfwd_ms']:.2f} | {g['jacfwd_ratio']:.2f} | {g['grad_compile_s']:.1f} | "
-                     f"{g['rev_vs_fwd_rel']:.1e} | {g['rev_vs_fd_rel']:.1e} |")
+                     f"{g['rev_vs_fwd_rel']:.1e} | {g['rev_vs_fd_rel']:.1e} | {g.get('fwd_vs_fd_rel', float('nan')):.1e} |")
         L.append("")
 
     c = data.get("compile")
