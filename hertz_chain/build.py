@@ -156,13 +156,13 @@ def _build(spec: StackSpec) -> Built:
                                  f"{n}-mass stack (allowed 1..{n - 1})")
     v0 = np.asarray(spec.initial_velocities(n), dtype=float)
     specs = {j: spec.contact_for(j) for j in interfaces}
+    m_eff = np.concatenate([m[:1], m[:-1] * m[1:] / (m[:-1] + m[1:])])  # ground: m_1; pair j: reduced mass
     e_nom = np.full(n, math.nan)
     for j, cs in specs.items():
-        e_nom[j] = _nominal_e(cs, m[0] if j == 0 else m[j - 1] * m[j] / (m[j - 1] + m[j]))
+        e_nom[j] = _nominal_e(cs, float(m_eff[j]))
     speeds = _approach_speeds(m, e_nom, ground, v0)
     laws: list[AbstractContactLaw | None] = [None] * n
     for j, cs in specs.items():
-        m_eff = m[0] if j == 0 else m[j - 1] * m[j] / (m[j - 1] + m[j])
         v_c = cs.calibration_velocity
         if v_c is None and cs.law in ("hunt-crossley", "viscoelastic") and cs.restitution is not None:
             v_c = float(speeds[j])
@@ -174,7 +174,7 @@ def _build(spec: StackSpec) -> Built:
                 cs.law,
                 stiffness=_stiffness(spec, cs, j, n),
                 restitution=cs.restitution,
-                effective_mass=float(m_eff),
+                effective_mass=float(m_eff[j]),
                 calibration_velocity=v_c,
                 chi_map=cs.chi_map,
                 alpha=cs.alpha,
