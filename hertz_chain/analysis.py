@@ -31,7 +31,7 @@ import warnings
 import numpy as np
 
 from .episodes import ContactEpisode, contact_episodes
-from .errors import HertzChainError, SolverError
+from .errors import HertzChainError, ParameterError, SolverError
 from .pulse import G0, PulseMetrics, pulse_metrics
 from .rigid import chain_gain, stack_gain
 from .rigid_events import simulate_rigid
@@ -239,6 +239,9 @@ def analyse(solution, *, nominal_restitution=None) -> Report:
     sol = solution
     stack = sol.stack
     st = sol.steps
+    if st is None:
+        raise ParameterError("solution", "a design without step history",
+                             "a Solution with steps (simulate, or simulate_batch with save_steps=True)")
     m = np.asarray(stack.masses, dtype=float)
     n, ground, g = m.size, bool(stack.ground), float(stack.gravity)
     interfaces = list(range(0 if ground else 1, n))

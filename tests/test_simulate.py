@@ -7,6 +7,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.special import beta
 
+from hertz_chain.analysis import analyse
 from hertz_chain.contact import Hertz, HuntCrossley, KelvinVoigt, Tsuji
 from hertz_chain.errors import ParameterError, SolverError
 from hertz_chain.simulate import (
@@ -154,6 +155,16 @@ def test_energy_audit_closes_with_damping_and_gravity():
     diss = sol.steps.dissipated
     assert diss[-1].sum() > 1e-3 * 0.5 * m.sum() * 4.0  # damping did dissipate
     assert np.all(np.diff(diss, axis=0) >= -1e-15)  # dissipated energy never decreases
+    # The audit is kept while solving (no step history needed). Reference: the same balance recomputed
+    # here in numpy at every saved step: sum m v^2/2 + sum m g x + sum 2/5 k delta^{5/2} + D, maximum
+    # deviation over the steps, in units of the drop energy sum(m) V^2/2 (V = 2 m/s).
+    st = sol.steps
+    x, v = st.positions, st.velocities
+    delta = np.concatenate([-x[:, :1], x[:, :-1] - x[:, 1:]], axis=1)
+    e = (0.5 * (m * v**2).sum(1) + G * (m * x).sum(1) + (0.4 * 1e9 * np.clip(delta, 0, None) ** 2.5).sum(1)
+         + diss.sum(1))
+    audit = np.max(np.abs(e - e[0])) / (0.5 * m.sum() * 2.0**2)
+    assert sol.energy_error == pytest.approx(audit, rel=1e-6, abs=1e-15)
 
 
 def test_resting_stack_stays_at_rest():
@@ -215,6 +226,17 @@ def test_batch_equals_individual_and_isolates_failure():
         np.testing.assert_allclose(batch.design(i).grid.forces, one.grid.forces, rtol=1e-6)
     with pytest.raises(SolverError, match="max_steps"):
         simulate(stacks[2], states[2], tolerances=TIGHT, max_steps=3000)
+    # Without the step history (throughput mode) the launch data are unchanged: same reference.
+    lean = simulate_batch(stack_designs(stacks), jax.tree.map(lambda *x: jnp.stack(x), *states),
+                          tolerances=TIGHT, max_steps=3000, save_steps=False)
+    assert lean.steps is None and list(lean.ok) == [True, True, False]
+    for i in range(2):
+        one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=3000)
+        np.testing.assert_allclose(lean.launch_velocities[i], one.launch_velocities, rtol=1e-8)
+        np.testing.assert_allclose(lean.launch_times[i], one.launch_times, rtol=1e-7)
+        assert lean.design(i).steps is None
+    with pytest.raises(ParameterError, match="step history"):
+        analyse(lean.design(0))
 
 
 def test_gradient_matches_finite_differences():
