@@ -1,4 +1,4 @@
-"""One place for process-wide JAX settings: float64 and the persistent compilation cache.
+"""One place for process-wide JAX settings: float64, CPU cores as devices, the compilation cache.
 
 Imported (for its side effects) by every module that uses JAX, before any array is created.
 """
@@ -10,6 +10,33 @@ import os
 import jax
 
 jax.config.update("jax_enable_x64", True)
+
+
+def expose_cpu_cores() -> int | None:
+    """Make every CPU core a JAX device, so that `simulate_batch` can split a batch over the cores (XLA
+    runs one design loop per device on one thread). Only before JAX has started, and only when the user
+    has not chosen (``XLA_FLAGS=--xla_force_host_platform_device_count``, ``jax_num_cpu_devices``);
+    ``HERTZ_CHAIN_CPU_DEVICES=N`` sets the number (1: one device). No effect on GPU machines' GPUs.
+    Returns the number set, or None.
+    """
+    try:
+        from jax._src import xla_bridge
+
+        if xla_bridge.backends_are_initialized():
+            return None
+    except (ImportError, AttributeError):  # pragma: no cover  (private API moved: leave JAX alone)
+        return None
+    if "xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", "") \
+            or jax.config.jax_num_cpu_devices != -1:
+        return None
+    want = os.environ.get("HERTZ_CHAIN_CPU_DEVICES", "")
+    try:
+        n = int(want) if want else len(os.sched_getaffinity(0))
+    except (ValueError, AttributeError):
+        n = os.cpu_count() or 1
+    n = max(1, min(n, 64))
+    jax.config.update("jax_num_cpu_devices", n)
+    return n
 
 _DEFAULT_CACHE = os.path.join(
     os.environ.get("XDG_CACHE_HOME", os.path.join(os.path.expanduser("~"), ".cache")),
@@ -37,3 +64,4 @@ def enable_compilation_cache(path: str | None = None) -> str | None:
 
 
 enable_compilation_cache()
+expose_cpu_cores()

@@ -3,6 +3,8 @@
 import os
 
 os.environ.setdefault("HERTZ_CHAIN_NO_CACHE", "1")  # tests measure nothing from a warm disk cache
+# two CPU devices on every machine, so that simulate_batch's split over devices is always exercised
+os.environ.setdefault("HERTZ_CHAIN_CPU_DEVICES", "2")
 
 import jax
 
