@@ -171,6 +171,8 @@ def batch_bench(sizes, quick: bool) -> dict:
                    max_steps_used=int(np.max(pilot.num_steps[:B])))
         t = median_time(lambda: hc.simulate_batch(stacks, states, tolerances=tol, max_steps=ms), reps)
         row["simulate_batch_ms"] = 1e3 * t / B
+        t = median_time(lambda: hc.simulate_batch(stacks, states, tolerances=tol, max_steps=ms, save_steps=False), reps)
+        row["simulate_batch_lean_ms"] = 1e3 * t / B
         row["vmap_launch_ms"] = 1e3 * median_time(lambda: jax.block_until_ready(jit_vmap(stacks, states)), reps) / B
         if ndev > 1 and B % ndev == 0 and not quick:
             ss, xs = split(stacks), split(states)
@@ -313,10 +315,11 @@ def targets(results, batch, grads, comp) -> list[dict]:
                              met=None if val is None else val >= goal, note=note))
     if batch:
         big = max(batch["rows"], key=lambda r: r["B"])
-        val = min(big.get("pmap_launch_ms", math.inf), big["vmap_launch_ms"], big["simulate_batch_ms"])
+        val = big["simulate_batch_lean_ms"]
         rows.append(dict(target=f"batched 5-mass designs, B = {max(x['B'] for x in batch['rows'])}",
                          goal="<= 0.5 ms/design", value=f"{val:.3f} ms", met=val <= 0.5,
-                         note="best of simulate_batch / vmap / vmap split over both cores"))
+                         note=f"simulate_batch(save_steps=False) over {batch['devices']} devices "
+                              f"(with the step history: {big['simulate_batch_ms']:.3f} ms)"))
     for g in grads or []:
         rows.append(dict(target=f"jax.grad of top launch velocity w.r.t. {g['n']} masses ({g.get('regime', 'gapped-tsuji')})",
                          goal="<= 5x one solve", value=f"{g['grad_ratio']:.1f}x", met=g["grad_ratio"] <= 5,
@@ -483,11 +486,16 @@ def markdown(data: dict) -> str:
         L += ["## Batched throughput", "",
               f"{b['n']}-mass designs ({b['regime']}), rtol = atol = {b['rtol']:g}, max_steps = {b['rows'][0]['max_steps']} "
               f"(a power of two with 25 % headroom over the slowest design). ms per design (batch time / B). "
-              f"`simulate_batch`: the library's batched entry point (one device); `vmap`: `jax.jit(jax.vmap(launch_velocity))` "
-              f"(one device); `2 cores`: the same split over {b['devices']} XLA CPU devices with `jax.pmap`;.", "",
-              "| B | mean steps | simulate_batch | vmap | 2 cores |", "|---|---|---|---|---|"]
+              f"`simulate_batch`: the library's batched entry point, which splits the designs over the "
+              f"{b['devices']} XLA CPU devices (one per core) from B >= 2 x devices, with the step history (default) "
+              f"and without (`save_steps=False`: launch data and energy audit only); `vmap`: "
+              f"`jax.jit(jax.vmap(launch_velocity))` on one device; `pmap`: the same split over the devices "
+              f"with `jax.pmap`.", "",
+              "| B | mean steps | simulate_batch | simulate_batch, save_steps=False | vmap (1 device) | pmap |",
+              "|---|---|---|---|---|---|"]
         for r in b["rows"]:
-            L.append(f"| {r['B']} | {r['mean_steps']:.0f} | {r['simulate_batch_ms']:.3f} | {r['vmap_launch_ms']:.3f} | "
+            L.append(f"| {r['B']} | {r['mean_steps']:.0f} | {r['simulate_batch_ms']:.3f} | "
+                     f"{_f(r.get('simulate_batch_lean_ms'), '{:.3f}')} | {r['vmap_launch_ms']:.3f} | "
                      f"{_f(r.get('pmap_launch_ms'), '{:.3f}')} |")
         L.append("")
 

@@ -75,7 +75,7 @@ def test_batch_grad_and_targets_structure(quick_run):
     _, data = quick_run
     (row,) = data["batch"]["rows"]
     assert row["B"] == 16 and row["max_steps"] >= row["max_steps_used"]
-    for key in ("simulate_batch_ms", "vmap_launch_ms"):
+    for key in ("simulate_batch_ms", "simulate_batch_lean_ms", "vmap_launch_ms"):
         assert math.isfinite(row[key]) and row[key] > 0
     (g,) = data["grads"]
     assert g["n"] == 2 and math.isfinite(g["grad_ratio"]) and g["grad_ratio"] > 0
