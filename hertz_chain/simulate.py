@@ -794,8 +794,9 @@ def simulate_batch(
     so this is the throughput mode for design sweeps. With the history (default), under `vmap` every
     step updates the `max_steps`-long buffers of every design by a select, so the cost per step grows
     with `max_steps`: keep `max_steps` near what the designs need (default 4096; a design that needs more
-    is flagged `"max_steps reached"`). Measured (5 masses, 256 designs, one core): 2.2 ms/design with
-    the history at `max_steps = 1024`, 1.5 ms without.
+    is flagged `"max_steps reached"`). With several JAX devices (every CPU core is one: module
+    docstring, "Batches") the designs are split over them. Measured (benchmarks/results.md, 5 masses,
+    1024 designs, 2 cores): 0.55 ms/design without the history, 1.55 ms with it at `max_steps = 2048`.
     """
     ts, t_max, cfg = _prepare(stacks, states, ts, t_max, solver, tolerances, max_steps, None, save_steps)
     if getattr(cfg.solver, "scan_kind", "") is None:
@@ -861,10 +862,11 @@ def launch_velocity(
     finite differences to 3.5e-6 (module docstring). A failed solve raises an error at run time
     (`eqx.error_if`), never a silent NaN.
 
-    Cost (benchmarks/results.md, 2 CPU cores): for the gradient with respect to all n masses, forward mode
-    (`jax.jacfwd`, `adjoint="forward"`) costs 2.1x-3.3x one solve (Hertz, n = 5, 10) and 2.7x-7.0x
-    (Tsuji), reverse mode (`jax.grad`, checkpointed) 5.0x-7.7x. Prefer forward mode for up to ~10
-    parameters.
+    Cost (benchmarks/results.md, 2 CPU cores): for the gradient with respect to all n masses, reverse
+    mode (`jax.grad`, a checkpoint at every step) costs 3.1x-4.1x one solve (Tsuji, n = 5, 10) and
+    3.9x-5.9x (Hertz); forward mode (`jax.jacfwd`, `adjoint="forward"`) 3.1x-6.0x (Tsuji) and 3.2x-4.9x
+    (Hertz), growing with the number of parameters: prefer it for a handful of parameters. Reverse mode
+    reserves about 70 n bytes per step of `max_steps` (module docstring).
     """
     tolerances = tolerances or Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True)
     _, t_max, cfg = _prepare(stack, state, None, t_max, solver, tolerances, max_steps, adjoint, save_steps=False)
