@@ -21,7 +21,7 @@ from scipy.integrate._ivp import radau as _radau, rk as _rk
 import hertz_chain as hc
 from hertz_chain.simulate import _scaled_field, _scales  # the library's own scaled vector field
 
-DIFFRAX_METHODS = ("tsit5", "dopri8", "kvaerno5")
+DIFFRAX_METHODS = ("tsit5", "tsit5-diffrax", "dopri8", "kvaerno5")
 SCIPY_METHODS = ("DOP853", "Radau", "LSODA")
 MAX_STEP = hc.Tolerances().max_step  # scaled units (contact times), the library default
 

@@ -17,7 +17,9 @@ relative speed, in general; 1 m/s if everything is at rest); dissipated energies
 `E = sum(m) V^2/2`. So `rtol`/`atol` mean the same for every design (Hertz contact: Johnson, *Contact
 Mechanics*, 1985, §11.1; references.md).
 
-**Solvers.** `"tsit5"` (default), `"dopri8"`, `"kvaerno5"` (implicit, with a corrected Newton
+**Solvers.** `"tsit5"` (default: `UnrolledTsit5`, diffrax's Tsit5 with its stages written out, 2.2x
+faster per step on a 10-mass stack: 5.6 -> 2.5 us, and 0.55 -> 0.39 ms per design in a 5-mass batch over 2
+cores), `"tsit5-diffrax"`, `"dopri8"`, `"kvaerno5"` (implicit, with a corrected Newton
 iteration), `"kvaerno5-stock"`, or any diffrax solver instance. The default is Tsit5: the stack is not
 stiff for Hertzian contact (`dt rho(J) <= 0.32` along the steps, references.md), so an implicit solver
 buys nothing. Measured (2-core CPU, 5/10 masses, ratio 0.5, Hertz, gaps 0.1 mm, rtol = atol = 1e-8, per
@@ -96,7 +98,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from typing import Any
+from typing import Any, ClassVar
 
 import diffrax as dfx
 import equinox as eqx
@@ -119,6 +121,7 @@ __all__ = [
     "BatchSolution",
     "Restitution",
     "STATUS",
+    "UnrolledTsit5",
     "make_solver",
     "simulate",
     "simulate_batch",
@@ -174,8 +177,48 @@ class Tolerances(eqx.Module):
         )
 
 
+class UnrolledTsit5(dfx.AbstractAdaptiveSolver):
+    """Tsitouras' 5(4) pair (Tsitouras 2011, *Comput. Math. Appl.* 62, 770), diffrax's tableau and
+    interpolation, with its seven stages written out rather than looped over.
+
+    diffrax's Runge–Kutta solvers run the stages through an inner while loop (general PyTrees, implicit
+    tableaus, one compiled stage); for the few dozen numbers of a stack's state the loop's bookkeeping
+    costs more than the vector field. Unrolled, XLA fuses each stage into the next: the same arithmetic
+    (to rounding) in fewer, larger operations. First same as last: the solver state is `f(t0, y0)`; the
+    stack is never solved with jumps (`made_jump` is always False: no `jump_ts`, no events that restart).
+    For one flat array state and an ODE term only.
+    """
+
+    term_structure: ClassVar = dfx.AbstractTerm
+    interpolation_cls: ClassVar = dfx.Tsit5.interpolation_cls
+
+    def order(self, terms):
+        return 5
+
+    def init(self, terms, t0, t1, y0, args):
+        return terms.vf(t0, y0, args)
+
+    def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
+        del made_jump
+        tab = dfx.Tsit5.tableau
+        dt = terms.contr(t0, t1)
+        ks = [solver_state * dt]
+        for a_row, c in zip(tab.a_lower, tab.c):
+            yi = y0 + sum(float(a) * k for a, k in zip(a_row, ks) if a != 0)
+            ks.append(terms.vf(t0 + float(c) * dt, yi, args) * dt)
+        y1 = yi  # Tsit5's last stage is evaluated at y1 (b_sol equals the last row: "ssal")
+        y_error = sum(float(b) * k for b, k in zip(tab.b_error, ks) if b != 0)
+        f1 = ks[-1] / dt
+        dense_info = dict(y0=y0, y1=y1, k=jnp.stack(ks))
+        return y1, y_error, dense_info, f1, dfx.RESULTS.successful
+
+    def func(self, terms, t0, y0, args):
+        return terms.vf(t0, y0, args)
+
+
 def make_solver(name: str | dfx.AbstractSolver, tolerances: Tolerances | None = None) -> dfx.AbstractSolver:
-    """A diffrax solver from a name: `"tsit5"`, `"dopri5"`, `"dopri8"`, `"kvaerno5"` (implicit, with a
+    """A diffrax solver from a name: `"tsit5"` (`UnrolledTsit5`), `"tsit5-diffrax"` (`diffrax.Tsit5`, the
+    same method with its stages in a loop), `"dopri5"`, `"dopri8"`, `"kvaerno5"` (implicit, with a
     Newton iteration that has a correct termination test), `"kvaerno5-stock"` (diffrax 0.7.2's default
     `VeryChord`, for comparison). A solver instance is returned unchanged."""
     if isinstance(name, dfx.AbstractSolver):
@@ -183,6 +226,8 @@ def make_solver(name: str | dfx.AbstractSolver, tolerances: Tolerances | None = 
     tol = tolerances or Tolerances()
     key = str(name).lower()
     if key == "tsit5":
+        return UnrolledTsit5()
+    if key == "tsit5-diffrax":
         return dfx.Tsit5()
     if key == "dopri5":
         return dfx.Dopri5()
@@ -195,8 +240,8 @@ def make_solver(name: str | dfx.AbstractSolver, tolerances: Tolerances | None = 
         return dfx.Kvaerno5(root_finder=rf, root_find_max_steps=10)
     if key == "kvaerno5-stock":
         return dfx.Kvaerno5()
-    raise ParameterError("solver", name, "'tsit5', 'dopri5', 'dopri8', 'kvaerno5', 'kvaerno5-stock' "
-                         "or a diffrax solver")
+    raise ParameterError("solver", name, "'tsit5', 'tsit5-diffrax', 'dopri5', 'dopri8', 'kvaerno5', "
+                         "'kvaerno5-stock' or a diffrax solver")
 
 
 def _make_adjoint(adjoint, max_steps: int) -> dfx.AbstractAdjoint:

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-METHODS = ("tsit5", "dopri8", "kvaerno5", "DOP853", "Radau", "LSODA")
+METHODS = ("tsit5", "tsit5-diffrax", "dopri8", "kvaerno5", "DOP853", "Radau", "LSODA")
 
 
 @pytest.fixture(scope="module")

@@ -187,6 +187,28 @@ def test_convergence_with_tolerance():
     assert errs[2] < 1e-7
 
 
+def test_unrolled_tsit5_equals_diffrax_tsit5():
+    # Reference: diffrax's own Tsit5 (same tableau, stages in a loop): one step of a nonlinear system
+    # agrees to rounding in the solution, the error estimate and the dense output; a fixed-step solve too.
+    import diffrax as dfx
+
+    from hertz_chain.simulate import UnrolledTsit5
+
+    term = dfx.ODETerm(lambda t, y, a: jnp.stack([y[1], -jnp.sin(y[0]) - a * y[1] * jnp.abs(y[1]) + jnp.cos(3 * t)]))
+    y0, args, t0, t1 = jnp.array([0.3, -1.2]), 0.7, 0.1, 0.35
+    out = []
+    for solver in (UnrolledTsit5(), dfx.Tsit5()):
+        state = solver.init(term, t0, t1, y0, args)
+        y1, err, dense, _, _ = solver.step(term, t0, t1, y0, args, state, False)
+        mid = solver.interpolation_cls(t0=t0, t1=t1, **dense).evaluate(0.2)
+        out.append((y1, err, mid))
+    for a, b in zip(*out):  # atol: rounding of sums of O(1) stage values (the error estimate cancels)
+        np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-15)
+    sols = [dfx.diffeqsolve(term, s, 0.0, 5.0, 0.01, y0, args=args, stepsize_controller=dfx.ConstantStepSize(),
+                            saveat=dfx.SaveAt(ts=jnp.linspace(0, 5, 11))).ys for s in (UnrolledTsit5(), dfx.Tsit5())]
+    np.testing.assert_allclose(sols[0], sols[1], rtol=1e-11, atol=1e-13)
+
+
 def test_kvaerno5_newton_fix():
     # Reference: diffrax 0.7.2's VeryChord stops after two iterations (diffrax PR #754); a Chord root
     # finder with a proper termination test must need fewer rejected steps, and agree with Tsit5.
@@ -253,7 +275,8 @@ def test_batch_split_over_devices_equals_individual():
         for i in range(5):
             one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=3000)
             np.testing.assert_allclose(batch.launch_velocities[i], one.launch_velocities, rtol=1e-8)
-            assert abs(int(batch.num_steps[i]) - one.num_steps) <= 0.02 * one.num_steps
+            # batched kernels round differently and the step sequences drift apart (module docstring)
+            assert abs(int(batch.num_steps[i]) - one.num_steps) <= 0.05 * one.num_steps
             # the audit (~1e-11 here: the solver's truncation error) is kept while solving without the
             # history, from the saved steps with it; batched rounding moves the steps, not the audit
             assert batch.energy_error[i] == pytest.approx(one.energy_error, rel=1e-3)
