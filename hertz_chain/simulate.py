@@ -18,7 +18,7 @@ relative speed, in general; 1 m/s if everything is at rest); dissipated energies
 Mechanics*, 1985, §11.1; references.md).
 
 **Solvers.** `"tsit5"` (default: `UnrolledTsit5`, diffrax's Tsit5 with its stages written out, 2.2x
-faster per step on a 10-mass stack: 5.6 -> 2.5 us, and 0.55 -> 0.39 ms per design in a 5-mass batch over 2
+faster per step on a 10-mass stack: 5.6 -> 2.5 us, and 0.55 -> 0.38 ms per design in a 5-mass batch over 2
 cores), `"tsit5-diffrax"`, `"dopri8"`, `"kvaerno5"` (implicit, with a corrected Newton
 iteration), `"kvaerno5-stock"`, or any diffrax solver instance. The default is Tsit5: the stack is not
 stiff for Hertzian contact (`dt rho(J) <= 0.32` along the steps, references.md), so an implicit solver
@@ -33,15 +33,15 @@ solvers use `VeryChord`, which declares divergence after two iterations (fixed u
 benchmark table (`benchmarks/results.md`, README) and from an error-distribution study. The table's
 single solves (no onset proxy: the same equations as scipy; reference Dopri8 at 1e-13; n = 2, 5, 10, 20;
 gapped Hertz/Tsuji, touching, e = 0.3, soft pad): at 1e-10 Tsit5 puts the top mass's launch velocity
-within 1e-7 (relative) in 18 of 20 cases and misses by up to 3x in two (e = 0.3, n = 5: 2.6e-7; soft pad,
-n = 10: 3.0e-7); Dopri8 misses in one (soft pad, n = 20: 2.8e-7). At the former 1e-8 errors reached 5e-5.
-Neither explicit method dominates: summed over n at matched accuracy, Dopri8 is fastest for gapped Hertz
-(15 vs 30 ms) and e = 0.3 (31 vs 34), Tsit5 for gapped Tsuji (31 vs 41), touching (16 vs 19) and the
-soft pad (95 vs 150); Kvaerno5 is 35-70x slower (summed over n). Run-to-run noise on the shared 2-core
-machine moves these totals by 10-20 % (the touching regime went to Dopri8 by 1 % in the previous run).
-Tsit5 stays the default because it wins in three of five regimes, by the widest margins where the stack
-is hardest (damped Tsuji contacts, stiffness contrast), and its error tail is tamed by the onset proxy;
-pass `solver="dopri8"` for undamped gapped stacks. The study: one case per regime hides a heavy
+within 1e-7 (relative) in 18 of 20 cases and misses by up to 7x in two (gapped Tsuji, n = 5: 1.0e-7; soft
+pad, n = 20: 7.4e-7; the stock diffrax Tsit5, the same method rounded differently, missed in two other
+cases by up to 3x); Dopri8 misses in one (soft pad, n = 20: 2.8e-7). At the former 1e-8 errors reached
+5e-5. Summed over n at matched accuracy (run of 2026-11-23 04:21), Tsit5 (`UnrolledTsit5`) is the fastest
+diffrax method in all five regimes: 9.1 ms gapped Hertz (Dopri8 13.1), 17.8 gapped Tsuji (34.1), 7.2
+touching (14.0), 13.4 for e = 0.3 (24.0), 40.7 soft pad (111.2); diffrax's own Tsit5 takes 1.4-2.2x as
+long, Kvaerno5 75-110x. (Before the stages were unrolled, Dopri8 won for gapped Hertz and e = 0.3, by
+margins that run-to-run noise of 10-20 % on the shared 2-core machine could reverse.) Its error tail is
+tamed by the onset proxy. The study: one case per regime hides a heavy
 tail. Over 100 gaps within 1e-11 of 1 cm (paper's six-mass MVG, 1e9 N/m^1.5, 1 m/s; error against Dopri8
 at 1e-12), a step that straddles a contact onset is now and then accepted with a large error: without the
 onset proxy, Hertz at 1e-10 has median error 1.8e-8 but maximum 3.3e-7; with it, maximum 3.6e-10 (1.4x the
@@ -841,7 +841,7 @@ def simulate_batch(
     with `max_steps`: keep `max_steps` near what the designs need (default 4096; a design that needs more
     is flagged `"max_steps reached"`). With several JAX devices (every CPU core is one: module
     docstring, "Batches") the designs are split over them. Measured (benchmarks/results.md, 5 masses,
-    1024 designs, 2 cores): 0.55 ms/design without the history, 1.55 ms with it at `max_steps = 2048`.
+    1024 designs, 2 cores): 0.38 ms/design without the history, 0.75 ms with it at `max_steps = 1024`.
     """
     ts, t_max, cfg = _prepare(stacks, states, ts, t_max, solver, tolerances, max_steps, None, save_steps)
     if getattr(cfg.solver, "scan_kind", "") is None:
@@ -908,10 +908,10 @@ def launch_velocity(
     (`eqx.error_if`), never a silent NaN.
 
     Cost (benchmarks/results.md, 2 CPU cores): for the gradient with respect to all n masses, reverse
-    mode (`jax.grad`, a checkpoint at every step) costs 3.1x-4.1x one solve (Tsuji, n = 5, 10) and
-    3.9x-5.9x (Hertz); forward mode (`jax.jacfwd`, `adjoint="forward"`) 3.1x-6.0x (Tsuji) and 3.2x-4.9x
-    (Hertz), growing with the number of parameters: prefer it for a handful of parameters. Reverse mode
-    reserves about 70 n bytes per step of `max_steps` (module docstring).
+    mode (`jax.grad`, a checkpoint at every step) costs 5.1x-5.8x one solve (Tsuji and Hertz, n = 5,
+    10: 12-37 ms); forward mode (`jax.jacfwd`, `adjoint="forward"`) 3.5x-9.0x, growing with the number of
+    parameters: prefer it for two or three parameters. Reverse mode reserves about 70 n bytes per step of
+    `max_steps` (module docstring).
     """
     tolerances = tolerances or Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True)
     _, t_max, cfg = _prepare(stack, state, None, t_max, solver, tolerances, max_steps, adjoint, save_steps=False)
