@@ -346,13 +346,10 @@ class _Contacts(eqx.Module):
     def update(c: _Contacts | None, t, ys, args, audit: bool) -> _Contacts:
         stack, scale, _ = args
         y = ys[: scale.shape[0]] * scale
-        x, v, diss = stack.split(y)
+        x, v, _ = stack.split(y)
         d, dd = stack.overlaps(x), stack.overlap_rates(v)
         active = stack.in_contact(d, dd) & stack.interface_mask()
-        e = None
-        if audit:  # Stack.total_energy as one reduction (each reduction is a separate loop operation)
-            e = jnp.sum(jnp.concatenate([0.5 * stack.masses * v**2 + stack.gravity * stack.masses * x,
-                                         stack.potentials(d), diss]))
+        e = stack.total_energy(y) if audit else None
         if c is None:
             c = _Contacts(jnp.broadcast_to(jnp.asarray([-1.0, 0.0, 0.0, 0.0]), d.shape + (4,)),
                           active & False, None if e is None else (e, 0.0 * e))

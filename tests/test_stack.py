@@ -88,6 +88,31 @@ def test_vector_field_conserves_energy_and_momentum():
     assert abs(float(jnp.sum(chain.masses * a)) + G * 2.0) <= 1e-12 * 1e4
 
 
+def test_total_energy_closed_form_single_and_batched():
+    # Reference: E = sum(m v^2 / 2) + g sum(m x) + sum(2/5 k delta^{5/2}) (Hertz potential) + sum(D),
+    # computed here with numpy; a batch of two designs with different gravity gives each its own E.
+    m = np.array([1.0, 0.5, 0.2])
+    x = np.array([-1e-5, -2e-5, 1e-3])  # ground and first contact compressed, top one open
+    v = np.array([0.3, -0.4, 2.0])
+    diss = np.array([1e-3, 2e-4, 0.0])
+    y = np.concatenate([x, v, diss])
+
+    def expected(k, g):
+        delta = np.maximum(np.array([-x[0], x[0] - x[1], x[1] - x[2]]), 0.0)
+        return (0.5 * np.sum(m * v**2) + g * np.sum(m * x) + np.sum(0.4 * k * delta**2.5)
+                + np.sum(diss))
+
+    designs = [(1e9, G), (3e9, 1.62)]
+    stacks = [Stack(m, Hertz(k), gravity=g) for k, g in designs]
+    for stack, (k, g) in zip(stacks, designs):
+        np.testing.assert_allclose(float(stack.total_energy(jnp.asarray(y))), expected(k, g), rtol=1e-14)
+        e = stack.energies(jnp.asarray(y))
+        np.testing.assert_allclose(float(sum(e.values())), expected(k, g), rtol=1e-14)
+    batch = stack_designs(stacks)
+    got = batch.total_energy(jnp.asarray(np.stack([y, y])))
+    np.testing.assert_allclose(np.asarray(got), [expected(k, g) for k, g in designs], rtol=1e-14)
+
+
 def test_mixed_laws_are_grouped_and_match_individual_laws():
     # Reference: each interface's force equals its own law evaluated alone.
     stack = _mixed_stack()
