@@ -33,6 +33,7 @@ if "xla_force_host_platform_device_count" not in os.environ.get("XLA_FLAGS", "")
     os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") +
                                f" --xla_force_host_platform_device_count={_NDEV}").strip()
 
+import diffrax as dfx  # noqa: E402
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
@@ -208,13 +209,18 @@ def grad_bench(sizes, quick: bool) -> list[dict]:
             fwd = jax.jit(top)
             ref = jax.jit(lambda m: top(m, "forward", ref_tol, 65536))
             grad = jax.jit(jax.grad(top))
+            # diffrax's own reverse mode through the solver loop, a checkpoint at every step (the
+            # library's previous default): the same discrete derivative as the replayed adjoint
+            grad_dfx = jax.jit(jax.grad(lambda m: top(m, dfx.RecursiveCheckpointAdjoint(checkpoints=ms))))
             jacf = jax.jit(jax.jacfwd(lambda m: top(m, "forward")))
             reps = 3 if quick else 9
             t_c = time.perf_counter(); jax.block_until_ready(grad(m0)); c_grad = time.perf_counter() - t_c  # noqa: E702
             t_fwd = median_time(lambda: jax.block_until_ready(fwd(m0)), reps)
             t_grad = median_time(lambda: jax.block_until_ready(grad(m0)), reps)
+            t_dfx = median_time(lambda: jax.block_until_ready(grad_dfx(m0)), reps)
             t_jacf = math.nan if quick else median_time(lambda: jax.block_until_ready(jacf(m0)), reps)
             g_r = np.asarray(grad(m0))
+            g_d = np.asarray(grad_dfx(m0))
             g_f = g_r * math.nan if quick else np.asarray(jacf(m0))
             fd = []  # central differences of the reference solve (independent check of the accuracy)
             for i in range(n):
@@ -225,6 +231,8 @@ def grad_bench(sizes, quick: bool) -> list[dict]:
             scale = np.max(np.abs(fd))
             rows.append(dict(regime=regime, n=n, steps=probe.num_steps, max_steps=ms, forward_ms=1e3 * t_fwd,
                              grad_ms=1e3 * t_grad, jacfwd_ms=1e3 * t_jacf, grad_ratio=t_grad / t_fwd,
+                             diffrax_grad_ms=1e3 * t_dfx, diffrax_grad_ratio=t_dfx / t_fwd,
+                             rev_vs_diffrax_rel=float(np.max(np.abs(g_r - g_d)) / np.max(np.abs(g_d))),
                              jacfwd_ratio=t_jacf / t_fwd, grad_compile_s=c_grad,
                              rev_vs_fwd_rel=float(np.max(np.abs(g_r - g_f)) / scale),
                              rev_vs_fd_rel=float(np.max(np.abs(g_r - fd)) / scale),
@@ -503,16 +511,20 @@ def markdown(data: dict) -> str:
         L += ["## Gradient cost", "",
               "`launch_velocity` defaults (rtol = atol = 1e-11, `resolve_onsets=True`). forward: "
               "`jax.jit` of the top launch velocity as a function of the masses; grad: `jax.jit(jax.grad(...))` "
-              "(reverse mode, `RecursiveCheckpointAdjoint`); jacfwd: `adjoint=\"forward\"` with `jax.jacfwd`. "
+              "(reverse mode, `launch_velocity`'s replayed discrete adjoint); diffrax grad: the same with "
+              "`adjoint=diffrax.RecursiveCheckpointAdjoint(checkpoints=max_steps)` (reverse mode through the solver "
+              "loop); rev vs diffrax: max |difference| / max |diffrax gradient| (the same discrete derivative); "
+              "jacfwd: `adjoint=\"forward\"` with `jax.jacfwd`. "
               "rev vs fwd, rev / fwd vs FD: max |difference| / max |FD gradient|, FD = central differences "
               "(h = 1e-4 m_i) of a reference solve at rtol = atol = 1e-13. The solver controls the error of the "
               "solution, not of its derivative: Tsuji's `delta^{1/4}` damping has an unbounded derivative at "
               "contact onset, so its gradient converges more slowly than Hertz's as the tolerance is tightened.", "",
-              "| regime | n | steps | max_steps | forward ms | grad ms | grad / forward | jacfwd ms | jacfwd / forward | grad compile s | rev vs fwd | rev vs FD | fwd vs FD |",
-              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+              "| regime | n | steps | max_steps | forward ms | grad ms | grad / forward | diffrax grad ms | diffrax grad / forward | rev vs diffrax | jacfwd ms | jacfwd / forward | grad compile s | rev vs fwd | rev vs FD | fwd vs FD |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
         for g in data["grads"]:
             L.append(f"| {g.get('regime', 'gapped-tsuji')} | {g['n']} | {g['steps']} | {g['max_steps']} | {g['forward_ms']:.2f} | {g['grad_ms']:.2f} | "
-                     f"{g['grad_ratio']:.2f} | {g['jacfwd_ms']:.2f} | {g['jacfwd_ratio']:.2f} | {g['grad_compile_s']:.1f} | "
+                     f"{g['grad_ratio']:.2f} | {_f(g.get('diffrax_grad_ms'), '{:.2f}')} | {_f(g.get('diffrax_grad_ratio'), '{:.2f}')} | "
+                     f"{_f(g.get('rev_vs_diffrax_rel'), '{:.1e}')} | {g['jacfwd_ms']:.2f} | {g['jacfwd_ratio']:.2f} | {g['grad_compile_s']:.1f} | "
                      f"{g['rev_vs_fwd_rel']:.1e} | {g['rev_vs_fd_rel']:.1e} | {g.get('fwd_vs_fd_rel', float('nan')):.1e} |")
         L.append("")
 

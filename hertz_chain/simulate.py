@@ -82,10 +82,16 @@ error-controlled, and the contact onset (where `F ~ delta^{3/2}` is not smooth) 
 (an auxiliary state that makes the controller resolve every onset) it is 1.1e-4 at `1e-10` and 3.5e-6 at
 `1e-11`. `launch_velocity` therefore defaults to `rtol = atol = 1e-11` with `resolve_onsets=True`. Use
 `adjoint="forward"` (`diffrax.ForwardMode`, for `jax.jacfwd`/`jax.jvp`; cheapest for a few parameters:
-33 ms for 11 parameters) or `"reverse"` (for `jax.grad`: `RecursiveCheckpointAdjoint` with a checkpoint
-at every step, so nothing is recomputed; it reserves `max_steps` checkpoints of the loop state, about
-70 n bytes each: 5.5 MB for n = 10 at `max_steps = 8192`, from XLA's memory analysis; agreed with
-forward mode to 5e-7). `BacksolveAdjoint` cannot be used: it refuses events. Laws whose Jacobian is
+33 ms for 11 parameters) or `"reverse"` (for `jax.grad`, the default of `launch_velocity`; agreed with
+forward mode to 5e-7). Reverse mode replays the accepted steps: the solve saves its accepted states
+(`4n` numbers per step of `max_steps`), and the backward pass runs once down that history, applying
+`jax.vjp` of the solver's own step to each, with the step times frozen, as diffrax's controller freezes
+them (it stops gradients through the step size). It is the discrete adjoint that diffrax's
+`RecursiveCheckpointAdjoint` computes through its loop (they agree to rounding, 1e-14, tested), without
+storing the whole loop state at every step and replaying the controller, the event and the bookkeeping
+(`_replayed_solve`): 2-3x cheaper than that with a checkpoint at every step. It supports reverse mode
+only; pass a diffrax adjoint (`RecursiveCheckpointAdjoint()`) for forward-over-reverse (Hessians).
+`BacksolveAdjoint` cannot be used: it refuses events. Laws whose Jacobian is
 singular at the onset (Tsuji `delta^{1/4}`, viscoelastic `delta^{1/2}` damping) give much less accurate
 discrete gradients (percent level at 1e-10 without `resolve_onsets`): check them against finite
 differences before relying on them. Measured with the onset proxy (benchmarks, gapped stacks, gradient
@@ -251,9 +257,10 @@ def _make_adjoint(adjoint, max_steps: int) -> dfx.AbstractAdjoint:
                                  "cannot be used with the stopping event)")
         return adjoint
     if adjoint in (None, "reverse"):
-        # One checkpoint per step: the state is a few dozen numbers, so storing every step (~1 kB each)
-        # is cheap, and reverse mode then recomputes nothing (diffrax's default, ~sqrt(2 max_steps)
-        # checkpoints, recomputes every step two to three times).
+        # `launch_velocity` differentiates "reverse" by replaying the steps (`_replayed_solve`), and then
+        # runs this adjoint's primal loop only. Otherwise one checkpoint per step: the state is a few dozen
+        # numbers, so storing every step is cheap, and reverse mode then recomputes nothing (diffrax's
+        # default, ~sqrt(2 max_steps) checkpoints, recomputes every step two to three times).
         return dfx.RecursiveCheckpointAdjoint(checkpoints=max_steps)
     if adjoint == "forward":
         return dfx.ForwardMode()
@@ -475,7 +482,8 @@ def _derived(stack: Stack, y):
     )
 
 
-def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, full: bool = True):
+def _setup(stack: Stack, state: State, t_max, cfg: _Config):
+    """Scales, the scaled initial state and the scaled end time of a solve."""
     n = stack.n
     sc = _scales(stack, state)
     scale = sc.vector(n)
@@ -483,20 +491,27 @@ def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, full: bool 
     span = jnp.max(state.positions) - jnp.min(state.positions)
     t_auto = 200.0 * n * sc.time + 4.0 * span / sc.velocity
     t1 = jnp.where(jnp.isnan(t_max), t_auto, t_max)
+    y0s = jnp.concatenate([y0 / scale, jnp.zeros(n)]) if cfg.tolerances.resolve_onsets else y0 / scale
+    return sc, scale, y0s, t1 / sc.time
+
+
+def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _Config, history: bool, audit: bool):
+    """The one call to `diffrax.diffeqsolve` (scaled state and time). Saves, in `sol.ys`/`sol.ts` in
+    this order: the accepted steps with `t0` (if `history`), the times `ts_s` (if given), `t1`."""
     subs = []
-    if cfg.save_steps:
+    if history:
         subs.append(dfx.SubSaveAt(t0=True, steps=True))
-    if ts is not None:
-        subs.append(dfx.SubSaveAt(ts=ts / sc.time))
+    if ts_s is not None:
+        subs.append(dfx.SubSaveAt(ts=ts_s))
     subs.append(dfx.SubSaveAt(t1=True))
-    sol = dfx.diffeqsolve(
+    return dfx.diffeqsolve(
         dfx.ODETerm(_scaled_field),
-        _Tracked.around(cfg.solver, cfg.adjoint, audit=full and not cfg.save_steps),
+        _Tracked.around(cfg.solver, cfg.adjoint, audit=audit),
         t0=0.0,
-        t1=t1 / sc.time,
+        t1=t1s,
         dt0=cfg.tolerances.first_step,
-        y0=jnp.concatenate([y0 / scale, jnp.zeros(n)]) if cfg.tolerances.resolve_onsets else y0 / scale,
-        args=(stack, scale, sc.time),
+        y0=y0s,
+        args=(stack, scale, T),
         saveat=dfx.SaveAt(subs=subs, solver_state=True),
         stepsize_controller=cfg.tolerances.controller(),
         event=dfx.Event(_cascade_complete),
@@ -504,31 +519,51 @@ def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, full: bool 
         adjoint=cfg.adjoint,
         throw=False,
     )
-    n3 = 3 * n
-    t_fin = sol.ts[-1][-1] * sc.time
-    y_fin = sol.ys[-1][-1, :n3] * scale
-    contacts = sol.solver_state[1]
-    t_end_if = _end_of_contacts(stack, contacts, sc.time, t_fin)
-    v_fin = stack.split(y_fin)[1]
-    t_end, v_launch = _launch(stack, t_end_if, t_fin, v_fin)
+
+
+def _core(sol) -> dict:
+    """What every solve reports: final scaled time and state, the contacts' bookkeeping, status, steps."""
     status = jnp.where(
         sol.result == dfx.RESULTS.event_occurred,
         COMPLETE,
         jnp.where(sol.result == dfx.RESULTS.successful, T_MAX,
                   jnp.where(sol.result == dfx.RESULTS.max_steps_reached, MAX_STEPS, FAILED)),
     )
+    return dict(t_fin=sol.ts[-1][-1], y_fin=sol.ys[-1][-1], contacts=sol.solver_state[1], status=status,
+                num_steps=sol.stats["num_steps"], num_accepted_steps=sol.stats["num_accepted_steps"],
+                num_rejected_steps=sol.stats["num_rejected_steps"])
+
+
+def _outputs(stack: Stack, sc: Scales, scale, core: dict) -> dict:
+    """Launch data (in SI) from a solve's `_core`."""
+    n3 = 3 * stack.n
+    t_fin = core["t_fin"] * sc.time
+    y_fin = core["y_fin"][:n3] * scale
+    t_end_if = _end_of_contacts(stack, core["contacts"], sc.time, t_fin)
+    v_fin = stack.split(y_fin)[1]
+    t_end, v_launch = _launch(stack, t_end_if, t_fin, v_fin)
+    status = core["status"]
     status = jnp.where(jnp.all(jnp.isfinite(y_fin)) | (status == MAX_STEPS), status, FAILED)
-    out = dict(
+    return dict(
         status=status,
         t_final=t_fin,
         launch_velocities=v_launch,
         launch_times=t_end,
         contact_end_times=t_end_if,
         final_velocities=v_fin,
-        num_steps=sol.stats["num_steps"],
-        num_accepted_steps=sol.stats["num_accepted_steps"],
-        num_rejected_steps=sol.stats["num_rejected_steps"],
+        num_steps=core["num_steps"],
+        num_accepted_steps=core["num_accepted_steps"],
+        num_rejected_steps=core["num_rejected_steps"],
     )
+
+
+def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, full: bool = True):
+    n3 = 3 * stack.n
+    sc, scale, y0s, t1s = _setup(stack, state, t_max, cfg)
+    sol = _diffeqsolve(stack, y0s, t1s, scale, sc.time, None if ts is None else ts / sc.time, cfg,
+                       history=cfg.save_steps, audit=full and not cfg.save_steps)
+    contacts = sol.solver_state[1]
+    out = _outputs(stack, sc, scale, _core(sol))
     if not full:
         return out
     out["scales"] = sc
@@ -873,8 +908,83 @@ def simulate_batch(
     )
 
 
-def _launch_impl(stack, state, t_max, cfg):
-    out = _solve_impl(stack, state, None, t_max, cfg, full=False)
+# ==================================================================== reverse mode: replay the accepted steps
+@eqx.filter_custom_vjp
+def _replayed_solve(diff, t1s, scale, T, cfg: _Config) -> dict:
+    """`_core` of the solve from `diff = (stack, y0s)`, differentiable in reverse mode by a discrete
+    adjoint over the accepted steps (`_replay_bwd`). Undifferentiated, it is the lean solve."""
+    stack, y0s = diff
+    return _core(_diffeqsolve(stack, y0s, t1s, scale, T, None, cfg, history=False, audit=False))
+
+
+@_replayed_solve.def_fwd
+def _replay_fwd(perturbed, diff, t1s, scale, T, cfg: _Config):
+    del perturbed
+    stack, y0s = diff
+    sol = _diffeqsolve(stack, y0s, t1s, scale, T, None, cfg, history=True, audit=False)
+    core = _core(sol)
+    # per interface: the history index of the point recorded in `_Contacts.rows` (the first accepted
+    # point after its last contact), found by its time (the same float), and whether there is one
+    c = core["contacts"]
+    match = sol.ts[0][None, :] == c.rows[:, 1:2]
+    idx, valid = jnp.argmax(match, axis=1), (c.rows[:, 0] >= 0) & ~c.now & jnp.any(match, axis=1)
+    return core, (sol.ts[0], sol.ys[0], idx, valid)
+
+
+@_replayed_solve.def_bwd
+def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _Config):
+    """Reverse sweep over the accepted steps `y_k = Phi(y_{k-1}; t_{k-1}, t_k, stack)`: with the step
+    times frozen (as diffrax's controller does in reverse mode: it stops gradients through the step size),
+    `lambda_{k-1} = (dPhi/dy)^T lambda_k + (cotangent of y_{k-1})` and `stack_bar += (dPhi/dstack)^T
+    lambda_k`, each step's vector-Jacobian product by `jax.vjp` of the solver's own step. The outputs
+    that depend on the state are the final state and, per interface, the overlap and its rate at the first
+    accepted point after the last contact (`_Contacts.rows`); the step times carry no gradient."""
+    del perturbed
+    hist_t, hist_y, idx, valid = residuals
+    stack, y0s = diff
+    n, n3 = stack.n, 3 * stack.n
+    N = jnp.sum(jnp.isfinite(hist_t)) - 1  # accepted steps: rows 0..N of the history are finite
+    ct_hist = jnp.zeros_like(hist_y)
+    if g["y_fin"] is not None:
+        ct_hist = ct_hist.at[N].add(g["y_fin"])
+    rows_ct = g["contacts"].rows
+    if rows_ct is not None:  # overlap and rate at the recorded point: a linear function of that state
+        def at_rows(Y):
+            x, v, _ = stack.split(Y[:, :n3] * scale)
+            return jnp.diagonal(stack.overlaps(x)), jnp.diagonal(stack.overlap_rates(v))
+
+        _, vjp = jax.vjp(at_rows, hist_y[idx])
+        (ct_Y,) = vjp((rows_ct[:, 2], rows_ct[:, 3]))
+        ct_hist = ct_hist.at[idx].add(jnp.where(valid[:, None], ct_Y, 0.0))
+    dyn, static = eqx.partition(stack, eqx.is_inexact_array)
+    terms, solver = dfx.ODETerm(_scaled_field), cfg.solver
+
+    def step(dyn, y, t0, t1):
+        args = (eqx.combine(dyn, static), scale, T)
+        return solver.step(terms, t0, t1, y, args, solver.init(terms, t0, t1, y, args), False)[0]
+
+    # The onset proxies (`resolve_onsets`, entries 3n:) feed nothing back into the motion and no output
+    # depends on them: replay the 3n physical equations only (the same arithmetic, component by component).
+    ct_hist = ct_hist[:, :n3]
+
+    def body(i, carry):
+        lam, acc = carry
+        k = N - i
+        _, vjp = jax.vjp(lambda d, y: step(d, y, hist_t[k - 1], hist_t[k]), dyn, hist_y[k - 1, :n3])
+        g_dyn, g_y = vjp(lam)
+        return g_y + ct_hist[k - 1], jax.tree.map(jnp.add, acc, g_dyn)
+
+    lam, acc = jax.lax.fori_loop(0, N, body, (ct_hist[N], jax.tree.map(jnp.zeros_like, dyn)))
+    return acc, jnp.zeros_like(y0s).at[:n3].set(lam)
+
+
+def _launch_impl(stack, state, t_max, cfg, replay: bool):
+    if replay:
+        sc, scale, y0s, t1s = _setup(stack, state, t_max, cfg)
+        frozen = jax.lax.stop_gradient((t1s, scale, sc.time))  # the end time and the scales carry no gradient
+        out = _outputs(stack, sc, scale, _replayed_solve((stack, y0s), *frozen, cfg))
+    else:
+        out = _solve_impl(stack, state, None, t_max, cfg, full=False)
     v = eqx.error_if(
         out["launch_velocities"], out["status"] >= MAX_STEPS,
         "hertz_chain.launch_velocity: the solve failed (max_steps reached or non-finite state); "
@@ -883,7 +993,7 @@ def _launch_impl(stack, state, t_max, cfg):
     return v
 
 
-_launch_jit = eqx.filter_jit(_launch_impl)
+_launch_jit = eqx.filter_jit(_launch_impl)  # `replay` is a Python bool: static
 
 
 def launch_velocity(
@@ -904,15 +1014,19 @@ def launch_velocity(
     finite differences to 3.5e-6 (module docstring). A failed solve raises an error at run time
     (`eqx.error_if`), never a silent NaN.
 
+    `adjoint`: `"reverse"` (default; `jax.grad` by replaying the accepted steps, module docstring;
+    reverse mode only), `"forward"` (`jax.jacfwd`, `jax.jvp`), or a diffrax adjoint, e.g.
+    `diffrax.RecursiveCheckpointAdjoint()` for higher-order derivatives.
+
     Cost (benchmarks/results.md, 2 CPU cores): for the gradient with respect to all n masses, reverse
-    mode (`jax.grad`, a checkpoint at every step) costs 5.1x-5.8x one solve (Tsuji and Hertz, n = 5,
-    10: 12-37 ms); forward mode (`jax.jacfwd`, `adjoint="forward"`) 3.5x-9.0x, growing with the number of
-    parameters: prefer it for two or three parameters. Reverse mode reserves about 70 n bytes per step of
-    `max_steps` (module docstring).
+    mode costs about 3x one solve (see the table); forward mode (`jax.jacfwd`, `adjoint="forward"`) grows with the
+    number of parameters: prefer it for two or three. Reverse mode keeps the accepted states, `32 n`
+    bytes per step of `max_steps`.
     """
     tolerances = tolerances or Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True)
+    replay = isinstance(adjoint, str) and adjoint == "reverse"
     _, t_max, cfg = _prepare(stack, state, None, t_max, solver, tolerances, max_steps, adjoint, save_steps=False)
-    return _launch_jit(stack, state, t_max, cfg)
+    return _launch_jit(stack, state, t_max, cfg, replay)
 
 
 # ==================================================================== one contact

@@ -81,4 +81,6 @@ def test_batch_grad_and_targets_structure(quick_run):
     assert g["n"] == 2 and math.isfinite(g["grad_ratio"]) and g["grad_ratio"] > 0
     # the discrete gradient is not error-controlled (Tsuji's delta^(1/4) onset): only check it is sane
     assert g["rev_vs_fd_rel"] < 0.2
+    # reference: diffrax's reverse mode through the loop computes the same discrete derivative
+    assert g["rev_vs_diffrax_rel"] <= 1e-12 and g["diffrax_grad_ms"] > 0
     assert any("grad" in t["target"] for t in data["targets"])
