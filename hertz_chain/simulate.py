@@ -89,7 +89,7 @@ forward mode to 5e-7). Reverse mode replays the accepted steps: the solve saves 
 them (it stops gradients through the step size). It is the discrete adjoint that diffrax's
 `RecursiveCheckpointAdjoint` computes through its loop (they agree to rounding, 1e-14, tested), without
 storing the whole loop state at every step and replaying the controller, the event and the bookkeeping
-(`_replayed_solve`): 2-3x cheaper than that with a checkpoint at every step. It supports reverse mode
+(`_replayed_solve`): 1.3-1.5x cheaper than that with a checkpoint at every step (benchmarks). It supports reverse mode
 only; pass a diffrax adjoint (`RecursiveCheckpointAdjoint()`) for forward-over-reverse (Hessians).
 `BacksolveAdjoint` cannot be used: it refuses events. Laws whose Jacobian is
 singular at the onset (Tsuji `delta^{1/4}`, viscoelastic `delta^{1/2}` damping) give much less accurate
