@@ -170,8 +170,8 @@ class Tolerances(eqx.Module):
     def __check_init__(self):
         for name in ("rtol", "atol", "max_step", "first_step"):
             value = getattr(self, name)
-            if isinstance(value, jax.Array) and name in ("rtol", "atol"):
-                continue  # already validated (traced copy made by `_prepare`)
+            if isinstance(value, (jax.Array, np.ndarray)) and name in ("rtol", "atol"):
+                continue  # already validated (the array copy made by `_prepare`, traced under jit)
             if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
                 raise ParameterError(name, value, "a finite number > 0")
         if not 0 <= self.pcoeff <= 1 or not 0 < self.icoeff <= 1:
@@ -788,7 +788,7 @@ def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, sa
             raise ParameterError("ts", f"last time {ts_np[-1]}", f"<= t_max = {t_max}")
         ts = jnp.asarray(ts_np)
     tolerances = eqx.tree_at(lambda t: (t.rtol, t.atol), tolerances,
-                             (jnp.asarray(float(tolerances.rtol)), jnp.asarray(float(tolerances.atol))))
+                             (np.asarray(float(tolerances.rtol)), np.asarray(float(tolerances.atol))))
     cfg = _Config(make_solver(solver, tolerances), tolerances, int(max_steps),
                   _make_adjoint(adjoint, int(max_steps)), save_steps)
     return ts, t_max, cfg
