@@ -942,7 +942,7 @@ def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _Config):
     del perturbed
     hist_t, hist_y, idx, valid = residuals
     stack, y0s = diff
-    n, n3 = stack.n, 3 * stack.n
+    n3 = 3 * stack.n
     N = jnp.sum(jnp.isfinite(hist_t)) - 1  # accepted steps: rows 0..N of the history are finite
     ct_hist = jnp.zeros_like(hist_y)
     if g["y_fin"] is not None:
