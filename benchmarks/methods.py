@@ -198,5 +198,35 @@ class ScipyCase:
         return statistics.median(ts)
 
 
+# ============================================================================ matched accuracy
+def fine_grid(loosest: float = 1e-5, tightest: float = 1e-12) -> tuple[float, ...]:
+    """The 1-2-5 tolerance grid from `loosest` to `tightest` (loose to tight): 1e-5, 5e-6, 2e-6, 1e-6, ..."""
+    grid = [float(f"{c}e-{k}") for k in range(1, 17) for c in (5, 2, 1)]
+    return tuple(r for r in grid if tightest * (1 - 1e-9) <= r <= loosest * (1 + 1e-9))
+
+
+def find_matched(get, grid, match: float) -> dict | None:
+    """Matched accuracy: the loosest `rtol` of `grid` (loose to tight) whose error is `<= match` and stays so
+    at every tighter grid rtol down to a tenth of it (`[rtol/10, rtol)`; on a grid coarser than that, at
+    the next tighter rtol; the tightest rtol of the grid on its own). A method reaches the accuracy
+    reliably from there on, so one lucky tolerance does not count: scipy's Radau at 1e-6 once landed at
+    1.3e-8 from the reference while 5e-7 and 2e-7 gave 4.2e-7 and 2.1e-7.
+
+    `get(rtol)` returns that rtol's result (a dict with `ok` and `err`); it is called lazily, loose to
+    tight, and only as far as the decision needs. None when no rtol qualifies."""
+
+    def ok(r):
+        return bool(r.get("ok")) and r["err"] <= match
+
+    for i, rtol in enumerate(grid):
+        if not ok(get(rtol)):
+            continue
+        tighter = grid[i + 1:]
+        check = [q for q in tighter if q >= rtol / 10 * (1 - 1e-9)] or tighter[:1]
+        if all(ok(get(q)) for q in check):
+            return get(rtol)
+    return None
+
+
 def rel_err(v: float, ref: float) -> float:
     return abs(v - ref) / abs(ref)
