@@ -167,6 +167,21 @@ def test_energy_audit_closes_with_damping_and_gravity():
     assert sol.energy_error == pytest.approx(audit, rel=1e-6, abs=1e-15)
 
 
+def test_step_history_independent_of_the_step_budget():
+    # Reference: the same solve. The step sequence does not depend on max_steps (only the buffers do),
+    # and the post-processing runs on the rows used, so the trajectory and the audit are bitwise equal;
+    # every accepted step and t0 is one row.
+    m = _mvg(4)
+    stack = Stack(m, HuntCrossley(1e9, 0.1), gravity=G)
+    state = at_impact(stack, 1.0, 1e-4)
+    small, big = (simulate(stack, state, max_steps=ms) for ms in (2000, 65536))
+    assert small.num_accepted_steps == big.num_accepted_steps
+    assert small.steps.t.shape == (small.num_accepted_steps + 1,)
+    for name in ("t", "positions", "velocities", "forces", "energy"):
+        np.testing.assert_array_equal(getattr(small.steps, name), getattr(big.steps, name))
+    assert small.energy_error == big.energy_error
+
+
 def test_resting_stack_stays_at_rest():
     # Reference: static equilibrium: a resting stack (state c, h = 0) has zero acceleration at t = 0.
     stack = Stack(_mvg(4), Hertz(1e9), gravity=G)
