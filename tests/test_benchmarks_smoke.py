@@ -84,3 +84,18 @@ def test_batch_grad_and_targets_structure(quick_run):
     # reference: diffrax's reverse mode through the loop computes the same discrete derivative
     assert g["rev_vs_diffrax_rel"] <= 1e-12 and g["diffrax_grad_ms"] > 0
     assert any("grad" in t["target"] for t in data["targets"])
+
+
+def test_render_from_json_reproduces_the_table(quick_run, tmp_path):
+    """`--render` rewrites the Markdown from a run's JSON without running anything: from the quick run's
+    own JSON it must give back the quick run's Markdown, byte for byte (the same data, the same renderer)."""
+    md, data = quick_run
+    src = tmp_path / "in.json"
+    src.write_text(json.dumps(data))
+    out = tmp_path / "out.md"
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "run.py"), "--render", str(src), "--output", str(out)],
+        cwd=ROOT, env=dict(os.environ), capture_output=True, text=True, timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert out.read_text() == md
