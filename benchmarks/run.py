@@ -497,18 +497,25 @@ def markdown(data: dict) -> str:
     if b:
         L += ["## Batched throughput", "",
               f"{b['n']}-mass designs ({b['regime']}), rtol = atol = {b['rtol']:g}, max_steps = {b['rows'][0]['max_steps']} "
-              f"(a power of two with 25 % headroom over the slowest design). ms per design (batch time / B). "
+              f"(a power of two with 25 % headroom over the slowest design). ms per design (batch time / B); "
+              f"designs/s = B / batch time. "
               f"`simulate_batch`: the library's batched entry point, which splits the designs over the "
               f"{b['devices']} XLA CPU devices (one per core) from B >= 2 x devices, with the step history (default) "
               f"and without (`save_steps=False`: launch data and energy audit only); `vmap`: "
               f"`jax.jit(jax.vmap(launch_velocity))` on one device; `pmap`: the same split over the devices "
               f"with `jax.pmap`.", "",
-              "| B | mean steps | simulate_batch | simulate_batch, save_steps=False | vmap (1 device) | pmap |",
-              "|---|---|---|---|---|---|"]
+              "| B | mean steps | simulate_batch ms/design | designs/s | simulate_batch, save_steps=False ms/design | designs/s "
+              "| vmap (1 device) ms/design | pmap ms/design |",
+              "|---|---|---|---|---|---|---|---|"]
+
+        def per_s(ms):
+            return _f(None if ms is None or not ms > 0 else 1e3 / ms, "{:.0f}")
+
         for r in b["rows"]:
+            lean = r.get("simulate_batch_lean_ms")
             L.append(f"| {r['B']} | {r['mean_steps']:.0f} | {r['simulate_batch_ms']:.3f} | "
-                     f"{_f(r.get('simulate_batch_lean_ms'), '{:.3f}')} | {r['vmap_launch_ms']:.3f} | "
-                     f"{_f(r.get('pmap_launch_ms'), '{:.3f}')} |")
+                     f"{per_s(r['simulate_batch_ms'])} | {_f(lean, '{:.3f}')} | {per_s(lean)} | "
+                     f"{r['vmap_launch_ms']:.3f} | {_f(r.get('pmap_launch_ms'), '{:.3f}')} |")
         L.append("")
 
     if data.get("grads"):

@@ -655,3 +655,23 @@ def test_bodies_helpers():
     assert b.n == 3 and b.gap_list(3) == (0.01, 0.01) and b.radius_list(3) is None
     with pytest.raises(ValueError):
         BodiesSpec(masses=(1.0, 0.5), design=None, gaps=(0.1, 0.2)).gap_list(2)
+
+
+@pytest.mark.parametrize("broken", ["file", "garbage"])
+def test_unit_registry_cache_never_stops_a_run(tmp_path, broken):
+    """pint's parsed-definitions cache (`~/.cache/hertz_chain/pint`) is an optimisation only: a cache
+    root that is a plain file, or a cache folder full of garbage, must still parse "1 cm" to 0.01 m."""
+    code = "from hertz_chain.stackfile import parse_quantity; print(parse_quantity('1 cm', 'length'))"
+    env = {**__import__("os").environ, "XDG_CACHE_HOME": str(tmp_path)}
+    env.pop("HERTZ_CHAIN_NO_CACHE", None)
+    if broken == "file":
+        (tmp_path / "hertz_chain").write_text("not a folder")
+    else:  # a real cache, written by a first run, then every file in it damaged
+        subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True, timeout=120)
+        files = list((tmp_path / "hertz_chain" / "pint").iterdir())
+        assert files
+        for f in files:
+            f.write_bytes(b"\x00garbage")
+    proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert float(proc.stdout) == 0.01  # 1 cm = 0.01 m exactly (SI definition)
