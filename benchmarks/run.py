@@ -255,6 +255,14 @@ def _clean_env(**extra):
     return env
 
 
+def _on_disk(folder: str) -> tuple[bool, bool]:
+    """(the compiled solve is in the compilation cache, the traced solve is in `_export`'s folder)."""
+    compiled = any(f.startswith(("jit__solve", "jit_simulate__solve")) for f in os.listdir(folder))
+    export = os.path.join(folder, "export")
+    traced = os.path.isdir(export) and any(f.endswith(".jaxexport") for f in os.listdir(export))
+    return compiled, traced
+
+
 def compile_and_cli(quick: bool) -> dict:
     py = sys.executable
     cli = os.path.join(os.path.dirname(py), "hertz-chain")
@@ -278,7 +286,7 @@ def compile_and_cli(quick: bool) -> dict:
                     raise RuntimeError(p.stderr[-2000:])
                 rec[phase] = json.loads(p.stdout.strip().splitlines()[-1])
             rec["cache_files"] = len(os.listdir(tmp))
-            rec["solve_cached"] = any(f.startswith("jit__solve_impl") for f in os.listdir(tmp))
+            rec["solve_cached"], rec["solve_exported"] = _on_disk(tmp)
             out["probe"][label] = rec
             log(f"  compile probe [{label}]: {rec}")
             if not quick and os.path.exists(cli):
@@ -287,8 +295,9 @@ def compile_and_cli(quick: bool) -> dict:
                 t_cold, p = wall([cli, "simulate", demo], env2)
                 ok = p.returncode == 0
                 warm = [wall([cli, "simulate", demo], env2)[0] for _ in range(3)]
+                compiled, traced = _on_disk(tmp2)
                 out["cli"][label] = dict(cold_s=t_cold, warm_s=statistics.median(warm), warm_all=warm, ok=ok,
-                                         solve_cached=any(f.startswith("jit__solve_impl") for f in os.listdir(tmp2)))
+                                         solve_cached=compiled, solve_exported=traced)
                 shutil.rmtree(tmp2, ignore_errors=True)
                 log(f"  cli [{label}]: {out['cli'][label]}")
         finally:
@@ -544,20 +553,24 @@ def markdown(data: dict) -> str:
         L += ["## Compile time and the CLI", ""]
     if c and c["probe"]:
         L += ["Subprocesses (`benchmarks/probe_compile.py`): cold = empty `HERTZ_CHAIN_CACHE_DIR`, warm = the same folder "
-              "again. first = trace + compile (or cache load) + run; second = run only. 5-mass gapped Tsuji, default tolerances.", "",
-              "| env | phase | import s | simulate first s | simulate second s | launch_velocity first s | launch second s | solve on disk |",
-              "|---|---|---|---|---|---|---|---|"]
+              "again. first = trace + compile (or cache load) + run; second = run only. 5-mass gapped Tsuji, default tolerances. "
+              "compiled / traced on disk: the solve's entry in JAX's compilation cache / its `jax.export` module "
+              "(`hertz_chain._export`, which skips the trace; only under `EQX_ON_ERROR=nan`).", "",
+              "| env | phase | import s | simulate first s | simulate second s | launch_velocity first s | launch second s | compiled on disk | traced on disk |",
+              "|---|---|---|---|---|---|---|---|---|"]
         for label, rec in c["probe"].items():
             for ph in ("cold", "warm"):
                 p = rec[ph]
                 L.append(f"| {label} | {ph} | {p['import_s']:.2f} | {p['simulate_first_s']:.2f} | {p['simulate_second_s']:.3f} | "
-                         f"{p['launch_first_s']:.2f} | {p['launch_second_s']:.3f} | {rec['solve_cached']} |")
+                         f"{p['launch_first_s']:.2f} | {p['launch_second_s']:.3f} | {rec['solve_cached']} | "
+                         f"{rec.get('solve_exported', '-')} |")
     if c:
         if c.get("cli"):
             L += ["", "`hertz-chain simulate examples/issue5_normative.toml` wall time (s), fresh cache folder:", "",
-                  "| env | cold | warm (median of 3) | solve cached on disk |", "|---|---|---|---|"]
+                  "| env | cold | warm (median of 3) | compiled on disk | traced on disk |", "|---|---|---|---|---|"]
             for label, r in c["cli"].items():
-                L.append(f"| {label} | {r['cold_s']:.2f} | {r['warm_s']:.2f} | {r['solve_cached']} |")
+                L.append(f"| {label} | {r['cold_s']:.2f} | {r['warm_s']:.2f} | {r['solve_cached']} | "
+                         f"{r.get('solve_exported', '-')} |")
         if "help_s" in c:
             L += ["", f"`hertz-chain --help`: {c['help_s']:.2f} s (median)."]
         L.append("")

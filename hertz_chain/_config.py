@@ -45,6 +45,10 @@ _DEFAULT_CACHE = os.path.join(
 )
 
 
+CACHE_DIR: str | None = None
+"""The compilation cache folder in use (None: off); `_export` keeps its traced functions below it."""
+
+
 def enable_compilation_cache(path: str | None = None) -> str | None:
     """Turn on JAX's persistent compilation cache (default: ``~/.cache/hertz_chain/jax``).
 
@@ -60,6 +64,8 @@ def enable_compilation_cache(path: str | None = None) -> str | None:
     jax.config.update("jax_compilation_cache_dir", path)
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+    global CACHE_DIR
+    CACHE_DIR = path
     return path
 
 

@@ -117,6 +117,7 @@ import optimistix as optx
 from jaxtyping import Array, ArrayLike
 
 from . import _config  # noqa: F401  (float64)
+from ._export import cached_jit
 from .contact import AbstractContactLaw
 from .errors import ParameterError, SolverError
 from .stack import Stack, State, at_impact, invert_monotone
@@ -580,7 +581,15 @@ def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, full: bool 
     return out
 
 
-_solve = eqx.filter_jit(_solve_impl)
+def _solve_plain(stack: Stack, state: State, ts, t_max, cfg: _Config) -> dict:
+    """`_solve_impl` with `Scales` as a dict: only dicts, tuples and arrays, which `jax.export` can keep."""
+    out = dict(_solve_impl(stack, state, ts, t_max, cfg))
+    out["scales"] = {f.name: getattr(out["scales"], f.name) for f in dataclasses.fields(Scales)}
+    return out
+
+
+# a traced solve is kept on disk where that is exact (`_export`: under EQX_ON_ERROR=nan, the CLI's setting)
+_solve = cached_jit(_solve_plain, eqx.filter_jit(_solve_plain), "simulate._solve")
 
 
 def _history_impl(stack: Stack, history, sc: Scales, rows: int):
@@ -874,7 +883,9 @@ def simulate(
     ts, t_max, cfg = _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint)
     if state.positions.shape != stack.masses.shape:
         raise ParameterError("state", state.positions.shape, f"positions of shape {stack.masses.shape}")
-    out = _post_history(_solve(stack, state, ts, t_max, cfg), stack, batched=False)
+    out = _solve(stack, state, ts, t_max, cfg)
+    out["scales"] = Scales(**out["scales"])
+    out = _post_history(out, stack, batched=False)
     sol = _to_solution(out | {"status_code": out["status"]}, stack, state)
     if throw and not sol.ok:
         raise SolverError(f"{sol.status} at t = {sol.t_final:.6g} s after {sol.num_steps} steps for the design "

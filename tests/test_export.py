@@ -1,0 +1,113 @@
+"""The disk cache of traced solves (`hertz_chain._export`).
+
+Reference for every result: the same solve through `eqx.filter_jit` alone (`HERTZ_CHAIN_NO_CACHE=1`, or
+the process's own jitted path), which must agree bit for bit: the exported module is the same StableHLO
+that `jax.jit` compiles, so any difference at all would be a defect, not round-off.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hertz_chain as hc
+from hertz_chain import _config, _export
+
+SCRIPT = r"""
+import json, sys
+import numpy as np
+import hertz_chain as hc
+from hertz_chain import _export
+n = int(sys.argv[1])
+stack = hc.Stack(0.5 ** np.arange(n), hc.Hertz(1e9), gravity=0.0)
+sol = hc.simulate(stack, hc.at_impact(stack, 1.0, gaps=1e-3))
+print(json.dumps({"v": [float(x).hex() for x in np.asarray(sol.launch_velocities)],
+                  "t": [float(x).hex() for x in np.asarray(sol.steps.t)[:sol.num_accepted_steps + 1]],
+                  "e": float(sol.energy_error).hex(), "steps": int(sol.num_steps),
+                  "cached": [k for k, v in _export._MEMO.items() if v is not None]}))
+"""
+
+
+def _run(n: int, tmp: Path, **env) -> dict:
+    full = {**os.environ, "HERTZ_CHAIN_CACHE_DIR": str(tmp / "jax"), "EQX_ON_ERROR": "nan"}
+    full.pop("HERTZ_CHAIN_NO_CACHE", None)
+    full.update(env)
+    full = {k: v for k, v in full.items() if v is not None}
+    proc = subprocess.run([sys.executable, "-c", SCRIPT, str(n)], env=full, capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def _same(a: dict, b: dict) -> bool:
+    return all(a[k] == b[k] for k in ("v", "t", "e", "steps"))
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("export")
+    folder = tmp / "jax" / "export"
+    first = _run(3, tmp)
+    files_after_first = sorted(p.name for p in folder.glob("*.jaxexport"))
+    stamps = {p.name: p.stat().st_mtime_ns for p in folder.iterdir()}
+    second = _run(3, tmp)
+    reread = stamps == {p.name: p.stat().st_mtime_ns for p in folder.iterdir()}
+    plain = _run(3, tmp, HERTZ_CHAIN_NO_CACHE="1")
+    return dict(tmp=tmp, folder=folder, first=first, second=second, plain=plain, files=files_after_first,
+                reread=reread)
+
+
+def test_exported_solve_is_written_read_and_bit_identical(runs):
+    assert len(runs["files"]) == 1
+    assert runs["first"]["cached"] and runs["second"]["cached"]  # both ran the exported module
+    assert runs["reread"]  # the second process read the file and wrote nothing
+    assert not runs["plain"]["cached"]  # HERTZ_CHAIN_NO_CACHE: filter_jit only
+    assert _same(runs["first"], runs["plain"]) and _same(runs["second"], runs["plain"])
+
+
+def test_another_shape_gets_its_own_entry(runs, tmp_path):
+    other = _run(4, runs["tmp"])
+    assert len(list(runs["folder"].glob("*.jaxexport"))) == 2
+    assert _same(other, _run(4, tmp_path, HERTZ_CHAIN_NO_CACHE="1"))
+
+
+def test_a_damaged_entry_is_replaced_not_trusted(runs):
+    (path,) = [runs["folder"] / name for name in runs["files"]]
+    path.write_bytes(b"\x00 not a serialized module")
+    again = _run(3, runs["tmp"])
+    assert _same(again, runs["plain"])
+    assert path.read_bytes() != b"\x00 not a serialized module"  # exported afresh
+
+
+def test_python_api_default_keeps_the_jit_path(tmp_path):
+    """Without EQX_ON_ERROR=nan equinox's checks are host callbacks: no export is attempted at all."""
+    out = _run(3, tmp_path, EQX_ON_ERROR=None)
+    assert not out["cached"]
+    assert not (tmp_path / "jax" / "export").exists()
+
+
+def test_unexportable_function_is_marked_and_falls_back(tmp_path, monkeypatch):
+    """In this process equinox raises (host callbacks), so exporting fails: the call must still return
+    the jitted result, and a marker must stop later processes from trying again."""
+    monkeypatch.setattr(_config, "CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("EQX_ON_ERROR", "nan")  # the gate reads the variable; equinox was imported with raise
+    monkeypatch.setattr(_export, "_MEMO", {})
+    stack = hc.Stack(0.5 ** np.arange(3), hc.Hertz(1e9), gravity=0.0)
+    state = hc.at_impact(stack, 1.0, gaps=1e-3)
+    sol = hc.simulate(stack, state)
+    markers = list((tmp_path / "export").glob("*.unexportable"))
+    assert len(markers) == 1 and not list((tmp_path / "export").glob("*.jaxexport"))
+    monkeypatch.setattr(_config, "CACHE_DIR", None)
+    ref = hc.simulate(stack, state)
+    np.testing.assert_array_equal(np.asarray(sol.launch_velocities), np.asarray(ref.launch_velocities))
+
+
+def test_static_values_without_stable_text_are_not_cached():
+    assert _export._key("f", [], None, (lambda x: x,)) is None
+    assert _export._key("f", [np.zeros(3)], None, (1.5, "tsit5")) is not None
