@@ -36,11 +36,11 @@ gapped Hertz/Tsuji, touching, e = 0.3, soft pad): at 1e-10 Tsit5 puts the top ma
 within 1e-7 (relative) in 18 of 20 cases and misses by up to 7x in two (gapped Tsuji, n = 5: 1.0e-7; soft
 pad, n = 20: 7.4e-7; the stock diffrax Tsit5, the same method rounded differently, missed in two other
 cases by up to 3x); Dopri8 misses in one (soft pad, n = 20: 2.8e-7). At the former 1e-8 errors reached
-5e-5. Summed over n at matched accuracy (run of 2026-11-23 10:21; matched = the loosest rtol of a 1-2-5
+5e-5. Summed over n at matched accuracy (run of 2026-11-23 11:02; matched = the loosest rtol of a 1-2-5
 grid that reaches 1e-7 and keeps it for a decade of tighter rtols), Tsit5 (`UnrolledTsit5`) is the fastest
-diffrax method in all five regimes: 7.0 ms gapped Hertz (Dopri8 10.7), 11.2 gapped Tsuji (23.6), 5.7
-touching (9.6), 12.8 for e = 0.3 (24.3), 33.0 soft pad (86.0); diffrax's own Tsit5 takes 1.7-2.3x as
-long, Kvaerno5 57-104x. The matched rtol of Tsit5 is 1e-10 to 2e-9 in 18 of 20 cases (5e-11 for
+diffrax method in all five regimes: 9.0 ms gapped Hertz (Dopri8 11.2), 14.4 gapped Tsuji (34.3), 6.5
+touching (13.8), 14.6 for e = 0.3 (35.8), 39.7 soft pad (92.8); diffrax's own Tsit5 takes 1.7-2.3x as
+long, Kvaerno5 63-87x. The matched rtol of Tsit5 is 1e-10 to 2e-9 in 18 of 20 cases (5e-11 for
 gapped Tsuji n = 5 and soft pad n = 20): the default sits at the tight end of that range. (Before the stages were unrolled, Dopri8 won for gapped Hertz and e = 0.3, by
 margins that run-to-run noise of 10-20 % on the shared 2-core machine could reverse.) Its error tail is
 tamed by the onset proxy. The study: one case per regime hides a heavy
@@ -878,7 +878,9 @@ def simulate(
       `t_max`; an unused step costs only memory, about 80 n bytes); `throw`: raise `SolverError` when the solve fails (max steps, non-finite
       state); with `throw=False` read `Solution.status`.
 
-    **Returns** a `Solution`. Compiled once per structure (n, law types, ground, solver, options).
+    **Returns** a `Solution`. Compiled once per structure (n, law types, ground, solver, options); the
+    compiled solve is kept in JAX's compilation cache and, under `EQX_ON_ERROR=nan` (the command line's
+    setting), the traced one too (`hertz_chain._export`), so a new process skips both.
     """
     ts, t_max, cfg = _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint)
     if state.positions.shape != stack.masses.shape:
@@ -918,7 +920,7 @@ def simulate_batch(
     with `max_steps`: keep `max_steps` near what the designs need (default 4096; a design that needs more
     is flagged `"max_steps reached"`). With several JAX devices (every CPU core is one: module
     docstring, "Batches") the designs are split over them. Measured (benchmarks/results.md, 5 masses,
-    1024 designs, 2 cores, run of 2026-11-23 10:21): 0.39 ms/design without the history, 1.01 ms with it
+    1024 designs, 2 cores, run of 2026-11-23 11:02): 0.37 ms/design without the history, 0.85 ms with it
     at `max_steps = 1024`.
     """
     ts, t_max, cfg = _prepare(stacks, states, ts, t_max, solver, tolerances, max_steps, None, save_steps)
@@ -1066,8 +1068,8 @@ def launch_velocity(
     `diffrax.RecursiveCheckpointAdjoint()` for higher-order derivatives.
 
     Cost (benchmarks/results.md, 2 CPU cores): for the gradient with respect to all n masses, reverse
-    mode costs 3.1x-3.9x one solve (Tsuji and Hertz, n = 5, 10: 5.6-17.8 ms; diffrax's own reverse mode
-    4.4x-5.3x); forward mode (`jax.jacfwd`, `adjoint="forward"`, 4.7x-7.3x) grows with the number of
+    mode costs 2.9x-3.9x one solve (Tsuji and Hertz, n = 5, 10: 5.7-17.3 ms; diffrax's own reverse mode
+    4.3x-6.0x); forward mode (`jax.jacfwd`, `adjoint="forward"`, 4.8x-7.5x) grows with the number of
     parameters: prefer it for two or three. Reverse mode keeps the accepted states, `32 n` bytes per
     step of `max_steps`.
     """
