@@ -67,6 +67,8 @@ def test_exported_solve_is_written_read_and_bit_identical(runs):
     assert len(runs["files"]) == 1
     assert runs["first"]["cached"] and runs["second"]["cached"]  # both ran the exported module
     assert runs["reread"]  # the second process read the file and wrote nothing
+    # issue 6: "make sure the compiled functions can be cached": the solve's executable is in JAX's cache
+    assert any(p.name.startswith("jit_simulate__solve_exported") for p in (runs["tmp"] / "jax").iterdir())
     assert not runs["plain"]["cached"]  # HERTZ_CHAIN_NO_CACHE: filter_jit only
     assert _same(runs["first"], runs["plain"]) and _same(runs["second"], runs["plain"])
 
