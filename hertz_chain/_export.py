@@ -10,23 +10,31 @@ process reads it back in about 2 ms, and compiling it hits the compilation cache
 It uses the disk only where the result is certain to be the same:
 
 - the key covers `name`, the structure of the arguments with their static values (as text), every array's
-  shape and dtype, the versions of jax, jaxlib, equinox, diffrax, lineax and optimistix, a hash of
-  hertz_chain's own source files, float64 and the JAX platform. A static value whose text is not stable
-  (an object printed with its address) turns the cache off for that call;
-- only under `EQX_ON_ERROR=nan` (the command line's setting): equinox's run-time checks are host
-  callbacks otherwise, and a module with a host callback cannot be serialised. The Python API therefore
-  keeps `jitted`'s path unless the user sets it;
-- never for traced arguments (a call under an outer `jit`, `vmap` or `grad`);
+  shape and dtype, the versions of numpy, jax, jaxlib, equinox, diffrax, lineax and optimistix, a hash of
+  hertz_chain's own source files, the JAX platform, and the JAX settings that change a trace (float64,
+  dtype and rank promotion, matmul precision; read at every call, so context managers count);
+- only for arguments built from classes of hertz_chain, JAX, equinox, diffrax, lineax, optimistix and
+  Python's containers, and static values of plain types (numbers, strings, bools, None, enums, NumPy
+  scalars and dtypes, tuples of these): a user's own class (a contact law, a solver) can change its code
+  between runs under the same name, and other values may print differently in the next process;
+- only under `EQX_ON_ERROR=nan` as equinox read it at import (the command line's setting): equinox's
+  run-time checks are host callbacks otherwise, and a module with a host callback cannot be serialised.
+  The Python API therefore keeps `jitted`'s path unless the user sets it before importing;
+- never for traced or weakly typed arguments (a call under an outer `jit`, `vmap` or `grad`; Python
+  scalars turned into arrays), whose promotion rules an exported module does not keep;
 - `fn` must return only dicts, lists, tuples, None and arrays (the pytree nodes `jax.export` serialises).
 
-Every failure to export, read or write falls back to `jitted`; a function that cannot be exported is
-marked (`<key>.unexportable`) so that later processes do not try again. Files live in
-`<compilation cache folder>/export/` (`~/.cache/hertz_chain/jax/export`); `HERTZ_CHAIN_NO_CACHE=1` turns
-both caches off.
+Every failure to export, read, write or run the exported module falls back to `jitted`; a function that
+cannot be exported is marked (`<key>.unexportable`) so that later processes do not try again. Files live in
+`<compilation cache folder>/export/` (`~/.cache/hertz_chain/jax/export`), named by the fingerprint of the
+versions and source: entries of another fingerprint (an upgrade, an edit) are deleted when a new entry is
+written, and at most `MAX_ENTRIES` are kept (the oldest go first). `HERTZ_CHAIN_NO_CACHE=1` turns both
+caches off.
 """
 
 from __future__ import annotations
 
+import enum
 import functools
 import hashlib
 import os
@@ -41,40 +49,103 @@ import numpy as np
 from . import _config
 
 _MEMO: dict[str, Callable | None] = {}
+MAX_ENTRIES = 256
+_TRUSTED = ("hertz_chain", "jax", "jaxlib", "equinox", "diffrax", "lineax", "optimistix", "builtins",
+            "collections")
+_PLAIN = (bool, int, float, complex, str, bytes, type(None), np.generic, np.dtype, enum.Enum)
 
 
 @functools.cache
-def _fingerprint() -> str:
-    """Versions and the package's own source: anything that could change what a trace produces."""
+def _fingerprint() -> str | None:
+    """Versions and the package's own source: anything that could change what a trace produces (None
+    when the source cannot be read, e.g. a zipped install)."""
     import diffrax
     import jaxlib
     import lineax
     import optimistix
 
     h = hashlib.sha256()
-    for mod in (jax, jaxlib, eqx, diffrax, lineax, optimistix):
+    for mod in (np, jax, jaxlib, eqx, diffrax, lineax, optimistix):
         h.update(f"{mod.__name__}={getattr(mod, '__version__', '?')};".encode())
-    h.update(f"x64={jax.config.jax_enable_x64};platform={jax.default_backend()};".encode())
-    for path in sorted(Path(__file__).resolve().parent.glob("*.py")):
+    h.update(f"platform={jax.default_backend()};".encode())
+    sources = sorted(Path(__file__).resolve().parent.glob("*.py"))
+    if not sources:
+        return None
+    for path in sources:
         h.update(path.name.encode())
         h.update(path.read_bytes())
-    return h.hexdigest()
+    return h.hexdigest()[:16]
+
+
+def _settings() -> str:
+    """The JAX settings that change a trace, as they are now (global or set by a context manager)."""
+    c = jax.config
+    return (f"x64={c.jax_enable_x64};promotion={c.jax_numpy_dtype_promotion};"
+            f"rank={c.jax_numpy_rank_promotion};matmul={c.jax_default_matmul_precision}")
+
+
+def _eqx_on_error() -> str | None:
+    try:
+        from equinox._config import EQX_ON_ERROR  # what equinox read at import; the variable may differ now
+
+        return EQX_ON_ERROR
+    except ImportError:  # pragma: no cover  (moved in another equinox: trust nothing)
+        return None
 
 
 def _folder() -> Path | None:
     root = _config.CACHE_DIR
-    if root is None or os.environ.get("EQX_ON_ERROR") != "nan":
+    if root is None or _eqx_on_error() != "nan":
         return None
     return Path(root) / "export"
 
 
+def _trusted_nodes(treedef) -> bool:
+    """Every node class of `treedef` comes from a package whose code the fingerprint covers."""
+    if jax.tree_util.treedef_is_leaf(treedef):
+        return True
+    kind = treedef.node_data()[0]
+    if kind.__module__.split(".")[0] not in _TRUSTED:
+        return False
+    return all(_trusted_nodes(child) for child in treedef.children())
+
+
+def _plain(value) -> bool:
+    if isinstance(value, tuple):
+        return all(_plain(v) for v in value)
+    return isinstance(value, _PLAIN)
+
+
 def _key(name: str, leaves: list, dyn_tree, static: Any) -> str | None:
-    static_text = f"{jax.tree_util.tree_structure(static)}|{jax.tree_util.tree_leaves(static)!r}"
+    """The cache key, or None where the cache cannot be exact (module docstring)."""
+    fingerprint = _fingerprint()
+    static_leaves, static_tree = jax.tree_util.tree_flatten(static)
+    if (fingerprint is None or not _trusted_nodes(dyn_tree) or not _trusted_nodes(static_tree)
+            or not all(_plain(v) for v in static_leaves)
+            or any(getattr(x, "weak_type", False) for x in leaves)):
+        return None
+    static_text = f"{static_tree}|{static_leaves!r}"
     if " at 0x" in static_text:  # printed with an address: not the same text in the next process
         return None
-    arrays = [(tuple(np.shape(x)), str(x.dtype), bool(getattr(x, "weak_type", False))) for x in leaves]
-    text = f"{name}|{_fingerprint()}|{dyn_tree}|{static_text}|{arrays}"
-    return hashlib.sha256(text.encode()).hexdigest()[:40]
+    arrays = [(tuple(np.shape(x)), str(x.dtype)) for x in leaves]
+    text = f"{name}|{_settings()}|{dyn_tree}|{static_text}|{arrays}"
+    return f"{fingerprint}-{hashlib.sha256(text.encode()).hexdigest()[:32]}"
+
+
+def _prune(folder: Path, keep: Path) -> None:
+    """Delete entries of another fingerprint, and the oldest beyond `MAX_ENTRIES`."""
+    prefix = keep.name.split("-")[0] + "-"
+    try:
+        entries = [p for p in folder.iterdir() if p != keep]
+        for p in entries:
+            if not p.name.startswith(prefix):
+                p.unlink(missing_ok=True)
+        mine = sorted((p for p in folder.iterdir() if p.suffix == ".jaxexport"), key=lambda p: p.stat().st_mtime)
+        for p in mine[:max(0, len(mine) - MAX_ENTRIES)]:
+            if p != keep:
+                p.unlink(missing_ok=True)
+    except OSError:
+        pass
 
 
 def _write(path: Path, blob: bytes) -> None:
@@ -111,6 +182,8 @@ def _load_or_export(path: Path, name: str, fn: Callable, leaves: list, dyn_tree,
         try:
             exported = export.export(jax.jit(flat))(*specs)
             blob = exported.serialize()
+        except MemoryError:
+            return None  # may not recur: no marker
         except Exception as exc:  # host callbacks, a non-serialisable output, flatbuffers missing, ...
             try:
                 _write(marker, f"{type(exc).__name__}: {exc}"[:2000].encode())
@@ -119,6 +192,7 @@ def _load_or_export(path: Path, name: str, fn: Callable, leaves: list, dyn_tree,
             return None
         try:
             _write(path, bytes(blob))
+            _prune(path.parent, path)
         except OSError:
             pass  # still use it in this process
     def run(*xs):
@@ -147,6 +221,12 @@ def cached_jit(fn: Callable, jitted: Callable, name: str) -> Callable:
         if key not in _MEMO:
             _MEMO[key] = _load_or_export(folder / f"{key}.jaxexport", name, fn, leaves, dyn_tree, static)
         run = _MEMO[key]
-        return jitted(*args) if run is None else run(*leaves)
+        if run is None:
+            return jitted(*args)
+        try:
+            return run(*leaves)
+        except Exception:  # a file that loads but does not fit, a changed setting, ...: never the user's problem
+            _MEMO[key] = None
+            return jitted(*args)
 
     return call

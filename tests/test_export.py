@@ -98,7 +98,7 @@ def test_unexportable_function_is_marked_and_falls_back(tmp_path, monkeypatch):
     """In this process equinox raises (host callbacks), so exporting fails: the call must still return
     the jitted result, and a marker must stop later processes from trying again."""
     monkeypatch.setattr(_config, "CACHE_DIR", str(tmp_path))
-    monkeypatch.setenv("EQX_ON_ERROR", "nan")  # the gate reads the variable; equinox was imported with raise
+    monkeypatch.setattr(_export, "_eqx_on_error", lambda: "nan")  # a lie: equinox was imported with raise
     monkeypatch.setattr(_export, "_MEMO", {})
     stack = hc.Stack(0.5 ** np.arange(3), hc.Hertz(1e9), gravity=0.0)
     state = hc.at_impact(stack, 1.0, gaps=1e-3)
@@ -110,6 +110,83 @@ def test_unexportable_function_is_marked_and_falls_back(tmp_path, monkeypatch):
     np.testing.assert_array_equal(np.asarray(sol.launch_velocities), np.asarray(ref.launch_velocities))
 
 
+def _parts(*args):
+    import equinox as eqx
+    import jax
+
+    dyn, static = eqx.partition(args, eqx.is_array)
+    leaves, tree = jax.tree_util.tree_flatten(dyn)
+    return leaves, tree, static
+
+
 def test_static_values_without_stable_text_are_not_cached():
-    assert _export._key("f", [], None, (lambda x: x,)) is None
-    assert _export._key("f", [np.zeros(3)], None, (1.5, "tsit5")) is not None
+    assert _export._key("f", *_parts(np.zeros(3), lambda x: x)) is None
+    assert _export._key("f", *_parts(np.zeros(3), frozenset({"a", "b"}))) is None  # order varies per process
+    assert _export._key("f", *_parts(np.zeros(3), 1.5, "tsit5", (1, 2))) is not None
+
+
+def test_user_classes_and_weak_types_are_not_cached():
+    """A user's class may change its code under the same name between runs (the fingerprint covers only
+    hertz_chain and its libraries); a weakly typed array promotes differently from the exported one."""
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    class Law(eqx.Module):
+        k: float
+
+    assert _export._key("f", *_parts(Law(np.ones(2)))) is None
+    assert _export._key("f", *_parts(hc.Hertz(1e9))) is not None
+    assert _export._key("f", *_parts(jnp.asarray(2.0))) is None  # weak_type=True
+    assert _export._key("f", *_parts(jnp.asarray(2.0, dtype=float))) is not None
+
+
+def test_jax_settings_are_part_of_the_key():
+    import jax
+
+    parts = _parts(np.zeros(3))
+    plain = _export._key("f", *parts)
+    with jax.numpy_dtype_promotion("strict"):
+        assert _export._key("f", *parts) != plain
+    with jax.default_matmul_precision("highest"):
+        assert _export._key("f", *parts) != plain
+    assert _export._key("f", *parts) == plain
+
+
+def test_a_failing_exported_call_falls_back(tmp_path, monkeypatch):
+    """An entry that loads but fails when run (here: one that raises) must give the jitted result and be
+    dropped for the rest of the process."""
+    calls = []
+
+    def fn(x):
+        return {"y": x * 2.0}
+
+    def jitted(x):
+        calls.append("jit")
+        return fn(x)
+
+    monkeypatch.setattr(_config, "CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(_export, "_eqx_on_error", lambda: "nan")
+    x = np.arange(3.0)
+    key = _export._key("t", *_parts(x))
+
+    def broken(*_):
+        raise ValueError("Dtype mismatch")
+
+    monkeypatch.setattr(_export, "_MEMO", {key: broken})
+    out = _export.cached_jit(fn, jitted, "t")(x)
+    np.testing.assert_array_equal(out["y"], [0.0, 2.0, 4.0])
+    assert calls == ["jit"] and _export._MEMO[key] is None
+
+
+def test_prune_keeps_this_fingerprint_and_at_most_max_entries(tmp_path, monkeypatch):
+    import time
+
+    monkeypatch.setattr(_export, "MAX_ENTRIES", 3)
+    old = [tmp_path / f"aaaa-{i}.jaxexport" for i in range(2)] + [tmp_path / "aaaa-9.unexportable"]
+    mine = [tmp_path / f"bbbb-{i}.jaxexport" for i in range(5)]
+    for i, p in enumerate(old + mine):
+        p.write_bytes(b"x")
+        os.utime(p, (time.time() - 100 + i, time.time() - 100 + i))
+    _export._prune(tmp_path, mine[-1])
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert left == ["bbbb-2.jaxexport", "bbbb-3.jaxexport", "bbbb-4.jaxexport"]
