@@ -41,7 +41,8 @@ grid that reaches 1e-7 and keeps it for a decade of tighter rtols), Tsit5 (`Unro
 diffrax method in all five regimes: 9.0 ms gapped Hertz (Dopri8 11.2), 14.4 gapped Tsuji (34.3), 6.5
 touching (13.8), 14.6 for e = 0.3 (35.8), 39.7 soft pad (92.8); diffrax's own Tsit5 takes 1.7-2.3x as
 long, Kvaerno5 63-87x. The matched rtol of Tsit5 is 1e-10 to 2e-9 in 18 of 20 cases (5e-11 for
-gapped Tsuji n = 5 and soft pad n = 20): the default sits at the tight end of that range. (Before the stages were unrolled, Dopri8 won for gapped Hertz and e = 0.3, by
+gapped Tsuji n = 5 and soft pad n = 20): the default sits at the tight end of that range. (Before the
+stages were unrolled, Dopri8 won for gapped Hertz and e = 0.3, by
 margins that run-to-run noise of 10-20 % on the shared 2-core machine could reverse.) Its error tail is
 tamed by the onset proxy. The study: one case per regime hides a heavy
 tail. Over 100 gaps within 1e-11 of 1 cm (paper's six-mass MVG, 1e9 N/m^1.5, 1 m/s; error against Dopri8
@@ -626,6 +627,8 @@ def _post_history(out: dict, stack: Stack, batched: bool) -> dict:
     fn = _history_batch if batched else _history
     out["steps"], out["energy_error"] = fn(stack, history, out["scales"], rows)
     return out
+
+
 def _solve_full(stack, state, ts, t_max, cfg):
     return _solve_impl(stack, state, ts, t_max, cfg)
 
