@@ -166,9 +166,7 @@ def _load_or_export(path: Path, name: str, fn: Callable, leaves: list, dyn_tree,
 
     try:
         exported = export.deserialize(bytearray(path.read_bytes()))
-    except FileNotFoundError:
-        exported = None
-    except Exception:  # damaged or foreign file: export afresh and replace it
+    except Exception:  # not there yet, damaged or foreign: export afresh (and replace it)
         exported = None
     if exported is None:
         marker = path.with_suffix(".unexportable")
@@ -195,6 +193,7 @@ def _load_or_export(path: Path, name: str, fn: Callable, leaves: list, dyn_tree,
             _prune(path.parent, path)
         except OSError:
             pass  # still use it in this process
+
     def run(*xs):
         return exported.call(*xs)
 
