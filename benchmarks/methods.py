@@ -25,9 +25,6 @@ DIFFRAX_METHODS = ("tsit5", "tsit5-diffrax", "dopri8", "kvaerno5")
 SCIPY_METHODS = ("DOP853", "Radau", "LSODA")
 MAX_STEP = hc.Tolerances().max_step  # scaled units (contact times), the library default
 
-STATUS_OK = ("cascade complete", "t_max reached")
-
-
 def median_time(fn, repeats: int, warmup: int = 1, budget_s: float = 3.0) -> float:
     """Median wall time (s) of `fn()` (which blocks) over up to `repeats` calls after `warmup` calls;
     stops repeating once the timed calls have used `budget_s` (at least one timed call)."""
@@ -61,11 +58,11 @@ class DiffraxCase:
         """Statistics and the top mass's launch velocity (`simulate`, `throw=False`)."""
         tol = hc.Tolerances(rtol=rtol, atol=rtol, resolve_onsets=False)  # the same 3n equations as scipy
         sol = hc.simulate(self.stack, self.state, solver=solver, tolerances=tol, max_steps=max_steps, throw=False)
-        if sol.status_code == 2:  # max_steps reached: retry with a larger budget
+        if sol.status == hc.Status.INCOMPLETE_MAX_STEPS:  # retry with a larger budget
             if max_steps < 65536:
                 return self.solve(solver, rtol, 65536)
         return dict(
-            ok=sol.status in STATUS_OK, status=sol.status, v_top=float(sol.launch_velocities[-1]),
+            ok=sol.ok, status=str(sol.status), v_top=float(sol.launch_velocities[-1]),
             t_final=sol.t_final, steps=sol.num_steps, accepted=sol.num_accepted_steps,
             rejected=sol.num_rejected_steps, max_steps=max_steps,
         )

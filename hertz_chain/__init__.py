@@ -84,6 +84,7 @@ _EXPORTS = {
     "octave_frequencies": "srs",
     "srs": "srs",
     "STANDARD_GRAVITY": "constants",
+    "Status": "status",
     "Stack": "stack",
     "State": "stack",
     "at_impact": "stack",
@@ -187,6 +188,7 @@ if TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
         simulate_batch,
     )
     from .srs import ShockResponseSpectrum, octave_frequencies, srs
+    from .status import Status
     from .stack import Stack, State, at_impact, dropped, resting, stack_designs
     from .stackfile import StackSpec, load_stack_file, parse_stack
 

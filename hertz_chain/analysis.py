@@ -36,6 +36,7 @@ from .pulse import G0, PulseMetrics, pulse_metrics
 from .rigid import chain_gain, stack_gain
 from .rigid_events import simulate_rigid
 from .srs import ShockResponseSpectrum, srs
+from .status import Status
 
 __all__ = ["INDEPENDENT_BELOW", "RigidComparison", "Report", "analyse", "independence"]
 
@@ -67,11 +68,11 @@ class RigidComparison:
 class Report:
     """The analysis of one simulated stack (SI units unless a name says otherwise)."""
 
-    status: str
+    status: Status
     drop_speed: float
     masses: np.ndarray
     ground: bool
-    episodes: tuple[ContactEpisode, ...]
+    episodes: tuple[ContactEpisode, ...]  # the first cascade's (every gain, e_eff and pulse is from them)
     restitution: np.ndarray  # (n,) measured e_eff per interface (entry 0 = ground; NaN if undefined)
     launch_velocities: np.ndarray
     velocity_gains: np.ndarray
@@ -86,6 +87,9 @@ class Report:
     num_steps: int
     num_rejected_steps: int
     t_final: float
+    cascade_end_time: float = float("nan")
+    rebounds: tuple[ContactEpisode, ...] = ()  # later impacts, kept out of every headline number
+    warnings: tuple[str, ...] = ()
     solution: object = dataclasses.field(repr=False, default=None)
 
     @property
@@ -227,7 +231,7 @@ def _top_srs(t, a_g, episodes, top_if) -> ShockResponseSpectrum | None:
         return None
 
 
-def analyse(solution, *, nominal_restitution=None) -> Report:
+def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = None) -> Report:
     """Analyse a `hertz_chain.Solution` (see the module docstring for every quantity).
 
     **Arguments:**
@@ -235,6 +239,13 @@ def analyse(solution, *, nominal_restitution=None) -> Report:
     - `solution`: the result of `hertz_chain.simulate`.
     - `nominal_restitution`: `(n,)` the restitution each interface was designed for (entry 0 = ground;
       entry 0 ignored without the ground), for the nominal rigid prediction; None skips it.
+    - `tolerances`: optional `{"rtol": ..., "atol": ...}` the solve used, for the warnings.
+
+    Episodes that start after their interface's last contact of the first cascade
+    (`Solution.contact_end_times`) are `rebounds`: listed on their own, kept out of the restitutions,
+    the pulses, the SRS and the regime. `warnings` lists, one line each: an energy audit above 1e-6,
+    a measured restitution outside [0, 1], a measured e more than 1 % from the nominal e in an
+    independent cascade, tolerances looser than 1e-6.
     """
     sol = solution
     stack = sol.stack
@@ -249,9 +260,16 @@ def analyse(solution, *, nominal_restitution=None) -> Report:
     dd_acc = np.concatenate([-a[:, :1], a[:, :-1] - a[:, 1:]], axis=1)  # overlap accelerations
     # round-off floor: touching float64 masses "overlap" by ~1e-24 m; real contacts by ~L = delta_max
     floor = 1e-9 * float(np.max(st.overlaps, initial=0.0))
-    episodes = contact_episodes(st.t, st.overlaps, st.overlap_rates, st.forces, accelerations=dd_acc,
-                                interfaces=interfaces, free_at_end=sol.status == "cascade complete",
-                                noise_floor=floor)
+    clamped = stack.clamped()
+    closed = np.where(clamped, st.forces > 0, st.overlaps > 0)
+    every = contact_episodes(st.t, st.overlaps, st.overlap_rates, st.forces, accelerations=dd_acc,
+                             interfaces=interfaces, free_at_end=sol.status.ok, noise_floor=floor,
+                             closed=closed, separation=_separation(stack))
+    # an episode that starts after its interface's last contact of the first cascade is a rebound
+    last_end = np.asarray(sol.contact_end_times, dtype=float)
+    first = [ep for ep in every if np.isfinite(last_end[ep.interface]) and ep.start < last_end[ep.interface]]
+    episodes = first if sol.status.ok else every
+    rebounds = [ep for ep in every if ep not in episodes]
     v0 = np.asarray(sol.state.velocities, dtype=float)
     v_ref = float(np.max(np.abs(v0)))
     e_meas = _main_restitution(episodes, n, v_ref)
@@ -261,10 +279,18 @@ def analyse(solution, *, nominal_restitution=None) -> Report:
     top_eff = 0.5 * m[-1] * launch[-1] ** 2 / ke0 if ke0 > 0 else float("nan")
     a_contact = a + g  # what an accelerometer on each mass reads
     v_contact = st.velocities + g * st.t[:, None]  # exact running integral of a + g
-    pulses = tuple(_pulse(st.t, a_contact[:, i], v_contact[:, i]) for i in range(n))
+
+    def cut(i):  # the samples of mass i's first cascade: before its first rebound
+        starts = [ep.start for ep in rebounds if ep.interface in (i, i + 1)]
+        return st.t < min(starts) if starts else np.ones(st.t.shape, dtype=bool)
+
+    pulses = tuple(_pulse(st.t[cut(i)], a_contact[cut(i), i], v_contact[cut(i), i]) for i in range(n))
     top_if = {n - 1} | ({n - 2} if n >= 2 and (n - 2 >= 1 or ground) else set())
-    top_srs = _top_srs(st.t, a_contact[:, -1] / G0, episodes, top_if)
+    keep = cut(n - 1)
+    top_srs = _top_srs(st.t[keep], a_contact[keep, -1] / G0, episodes, top_if)
     ind = independence(episodes, interfaces)
+    rigid = _rigid_comparison(sol, e_meas, nominal_restitution, v_ref)
+    regime = "independent" if ind < INDEPENDENT_BELOW else "overlapping"
     return Report(
         status=sol.status,
         drop_speed=v_ref,
@@ -276,14 +302,61 @@ def analyse(solution, *, nominal_restitution=None) -> Report:
         velocity_gains=gains,
         top_velocity_gain=float(gains[-1]),
         top_efficiency=float(top_eff),
-        rigid=_rigid_comparison(sol, e_meas, nominal_restitution, v_ref),
+        rigid=rigid,
         pulses=pulses,
         top_srs=top_srs,
         independence=ind,
-        regime="independent" if ind < INDEPENDENT_BELOW else "overlapping",
+        regime=regime,
         energy_error=float(sol.energy_error),
         num_steps=int(sol.num_steps),
         num_rejected_steps=int(sol.num_rejected_steps),
         t_final=float(sol.t_final),
+        cascade_end_time=float(sol.cascade_end_time),
+        rebounds=tuple(rebounds),
+        warnings=tuple(_warnings(sol, e_meas, nominal_restitution, regime, tolerances)),
         solution=sol,
     )
+
+
+#: Warnings (issue 16): an energy audit worse than this (relative to the drop energy) ...
+ENERGY_WARN = 1e-6
+#: ... a measured e_eff this far (relative) from the nominal e of its interface in an independent cascade ...
+RESTITUTION_WARN = 0.01
+#: ... and solver tolerances looser than this.
+TOLERANCE_WARN = 1e-6
+
+
+def _warnings(sol, e_meas, e_nom, regime, tolerances) -> list[str]:
+    """One line each: what a user should know before trusting the numbers."""
+    out = []
+    if np.isfinite(sol.energy_error) and sol.energy_error > ENERGY_WARN:
+        out.append(f"energy audit: |E(t) - E(0)| reached {sol.energy_error:.2e} of the drop energy "
+                   f"(> {ENERGY_WARN:g}): tighten solver.rtol/atol")
+    for j, e in enumerate(e_meas):
+        if np.isfinite(e) and not 0.0 <= e <= 1.0:
+            out.append(f"interface {j}: measured restitution {e:.6g} lies outside [0, 1]")
+    if e_nom is not None and regime == "independent":
+        for j, (em, en) in enumerate(zip(e_meas, np.asarray(e_nom, dtype=float))):
+            if np.isfinite(em) and np.isfinite(en) and en > 0 and abs(em - en) > RESTITUTION_WARN * en:
+                out.append(f"interface {j}: the contact law gives e = {em:.4f} where the file asks for "
+                           f"{en:.4f} ({(em - en) / en:+.1%}): its chi map is approximate at this speed")
+    if tolerances is not None:
+        loose = {k: v for k, v in tolerances.items() if v is not None and v > TOLERANCE_WARN}
+        for k, v in loose.items():
+            out.append(f"solver.{k} = {v:g} is looser than {TOLERANCE_WARN:g}: the launch velocities may "
+                       "be off by more than 1e-6")
+    return out
+
+
+def _separation(stack):
+    """`separation(j, delta, delta_dot)` for `contact_episodes`: `Stack.separation_function` of
+    interface `j` on arrays of samples (one JAX call each)."""
+    n = stack.n
+
+    def fn(j, delta, rate):
+        d = np.zeros((np.size(delta), n))
+        r = np.zeros((np.size(delta), n))
+        d[:, j], r[:, j] = delta, rate
+        return np.asarray(stack.separation_function(d, r))[:, j]
+
+    return fn

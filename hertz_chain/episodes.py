@@ -1,8 +1,13 @@
 """Contact episodes of a simulated stack, and the effective restitution of each.
 
-An *episode* of interface ``j`` is a maximal time interval over which its overlap ``delta_j > 0``.
-Its start and end are located between the solver's steps by the root of the cubic Hermite interpolant
-built from ``delta`` and ``delta_dot`` at the two bracketing steps. Between contacts the relative motion
+An *episode* of interface ``j`` is a maximal time interval over which its contact pushes: it starts
+where the overlap ``delta_j`` turns positive and ends where the contact force returns to zero (one
+definition of a contact's end everywhere: the simulator's launch velocities and `restitution`, these
+episodes and the pulses agree). A clamped damped contact (Tsuji, Hunt–Crossley, ...) lets go at
+``delta > 0``; an elastic one at ``delta = 0``. The start and end are located between the solver's
+steps: from the open (free-flight) side, where the motion is exact (below), with the force-zero
+condition given by the caller's ``separation`` function; otherwise by the root of the cubic Hermite
+interpolant built from ``delta`` and ``delta_dot`` at the two bracketing steps. Between contacts the relative motion
 of two masses is uniform (gravity acts on both alike) and the motion of mass 1 relative to the ground is
 uniformly accelerated, so ``delta`` is at most quadratic in time there and the Hermite interpolant —
 and with it the crossing time and the relative velocity at the crossing — is exact up to the solver's
@@ -110,6 +115,28 @@ def _refined_max(t, y, dy, i0, i1) -> float:
     return best
 
 
+def _free_side_release(ta, ya, da, aa, tb, sep) -> tuple[float, float] | None:
+    """Where a contact let go: the last zero of ``sep(delta(s), delta_dot(s))`` along the free flight
+    ``delta = ya + da s + aa s^2/2`` extrapolated back from the open point ``ta`` towards the last closed
+    point ``tb < ta`` (exact: the bodies fly freely after the force returned to zero). Two rounds of 257
+    samples, then linear interpolation: the time to ~1e-10 of the step. None if ``sep`` is never
+    positive on the way (then the caller falls back to the overlap)."""
+    lo, hi = tb - ta, 0.0
+    for _ in range(2):
+        s = np.linspace(lo, hi, 257)
+        g = np.asarray(sep(ya + da * s + 0.5 * aa * s**2, da + aa * s), dtype=float)
+        pos = np.flatnonzero(g > 0)
+        if pos.size == 0:
+            return None
+        k = int(pos[-1])
+        if k == s.size - 1:
+            return float(ta), float(da)
+        lo, hi = s[k], s[k + 1]
+        g_lo, g_hi = g[k], g[k + 1]
+    x = lo + (hi - lo) * g_lo / (g_lo - g_hi) if g_lo != g_hi else hi
+    return float(ta + x), float(da + aa * x)
+
+
 def _free_side_crossing(ta, ya, da, aa, tb) -> tuple[float, float] | None:
     """Crossing of ``y = ya + da s + aa s^2/2`` (exact in free flight) between ``ta`` and ``tb``."""
     h = tb - ta
@@ -132,6 +159,8 @@ def contact_episodes(
     interfaces: list[int] | None = None,
     free_at_end: bool = False,
     noise_floor: float = 0.0,
+    closed: np.ndarray | None = None,
+    separation=None,
 ) -> list[ContactEpisode]:
     """Find every contact episode of every interface.
 
@@ -150,6 +179,11 @@ def contact_episodes(
       sample is then complete: its end is extrapolated forward in free flight to ``delta = 0``.
     - `noise_floor`: episodes whose largest overlap does not exceed it (m) are round-off, not contacts,
       and are dropped (touching masses in float64 overlap by ~1e-24 m).
+    - `closed`: optional ``(T, n_if)`` booleans, the contact pushes at each sample (force > 0 for a
+      clamped law); default ``overlaps > 0``.
+    - `separation`: optional ``separation(j, delta, delta_dot) -> G`` (arrays), ``> 0`` exactly while
+      interface ``j`` pushes (`Stack.separation_function`). With `accelerations`, every end is located
+      where ``G`` returns to zero along the free flight after it: the force's return to zero.
 
     **Returns** the episodes sorted by start time.
     """
@@ -160,8 +194,9 @@ def contact_episodes(
     T, n_if = d.shape
     cols = range(n_if) if interfaces is None else interfaces
     episodes: list[ContactEpisode] = []
+    mask = d > 0 if closed is None else np.asarray(closed, dtype=bool)
     for j in cols:
-        closed = d[:, j] > 0
+        closed = mask[:, j]
         if not closed.any():
             continue
         change = np.diff(closed.astype(np.int8))
@@ -195,8 +230,12 @@ def contact_episodes(
                         (t_end, v_out), complete = hit, complete_start
             else:
                 k = i1 + 1
-                hit = None if accelerations is None else _free_side_crossing(
-                    t[k], d[k, j], r[k, j], accelerations[k, j], t[i1])
+                hit = None
+                if accelerations is not None and separation is not None:
+                    hit = _free_side_release(t[k], d[k, j], r[k, j], accelerations[k, j], t[i1],
+                                             lambda dd_, rr_, j=j: separation(j, dd_, rr_))
+                if hit is None and accelerations is not None:
+                    hit = _free_side_crossing(t[k], d[k, j], r[k, j], accelerations[k, j], t[i1])
                 t_end, v_out = hit or _crossing(t[i1], t[k], d[i1, j], d[k, j], r[i1, j], r[k, j])
             run = slice(i0, i1 + 1)
             episodes.append(

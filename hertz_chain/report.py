@@ -50,15 +50,17 @@ def run_spec(spec: StackSpec) -> Report:
     from .simulate import simulate
 
     built = build(spec)
-    sol = simulate(built.stack, built.state, **built.simulate_options)
+    options = dict(built.simulate_options, throw=False)  # the status says how it ended (partial results)
+    sol = simulate(built.stack, built.state, **options)
     if built.n_output or built.dt_output:
         if built.dt_output:
             ts = np.arange(0.0, sol.t_final, built.dt_output)
         else:
             ts = np.linspace(0.0, sol.t_final, built.n_output)
-        options = dict(built.simulate_options, t_max=sol.t_final)
-        sol = simulate(built.stack, built.state, ts=ts, **options)
-    return analyse(sol, nominal_restitution=built.nominal_restitution)
+        sol = simulate(built.stack, built.state, ts=ts, **dict(options, t_max=sol.t_final))
+    tol = {k: built.simulate_options["tolerances"].__getattribute__(k) for k in ("rtol", "atol")} \
+        if built.simulate_options.get("tolerances") is not None else None
+    return analyse(sol, nominal_restitution=built.nominal_restitution, tolerances=tol)
 
 
 def simulate_file(path: str | Path) -> Report:
@@ -76,6 +78,21 @@ def _num(x):
 
 def _nums(a):
     return [_num(x) for x in np.asarray(a, dtype=float).ravel()]
+
+
+def _episode_dict(ep) -> dict:
+    return {
+        "interface": ep.interface,
+        "start_s": ep.start,
+        "end_s": ep.end,
+        "duration_s": ep.duration,
+        "restitution": _num(ep.restitution),
+        "approach_velocity_mps": ep.approach_velocity,
+        "separation_velocity_mps": ep.separation_velocity,
+        "max_overlap_m": ep.max_overlap,
+        "peak_force_N": ep.peak_force,
+        "complete": ep.complete,
+    }
 
 
 def _pulse_dict(pm) -> dict | None:
@@ -97,8 +114,14 @@ def to_dict(report: Report) -> dict:
     top = report.top_pulse
     rigid = report.rigid
     srs = report.top_srs
+    status = report.status
     return {
-        "status": report.status,
+        "status": status.text,
+        "status_code": int(status),
+        "partial": not status.ok,  # the headline numbers are not valid (incomplete, no contact, failed)
+        "hint": status.hint(),
+        "warnings": list(report.warnings),
+        "cascade_end_s": _num(report.cascade_end_time),
         "drop_speed_mps": _num(report.drop_speed),
         "masses_kg": _nums(report.masses),
         "top_velocity_gain": _num(report.top_velocity_gain),
@@ -113,21 +136,8 @@ def to_dict(report: Report) -> dict:
             "measured_restitution": _nums(rigid.measured_restitution),
             "notes": list(rigid.notes),
         },
-        "contacts": [
-            {
-                "interface": ep.interface,
-                "start_s": ep.start,
-                "end_s": ep.end,
-                "duration_s": ep.duration,
-                "restitution": _num(ep.restitution),
-                "approach_velocity_mps": ep.approach_velocity,
-                "separation_velocity_mps": ep.separation_velocity,
-                "max_overlap_m": ep.max_overlap,
-                "peak_force_N": ep.peak_force,
-                "complete": ep.complete,
-            }
-            for ep in report.episodes
-        ],
+        "contacts": [_episode_dict(ep) for ep in report.episodes],
+        "rebounds": [_episode_dict(ep) for ep in report.rebounds],
         "top_pulse": _pulse_dict(top),
         "pulses": [_pulse_dict(pm) for pm in report.pulses],  # every mass, bottom first
         "top_srs": None if srs is None else {
@@ -137,11 +147,11 @@ def to_dict(report: Report) -> dict:
             "primary_g": _nums(srs.primary),
             "residual_g": _nums(srs.residual),
         },
-        "independence": report.independence,
+        "independence": _num(report.independence),
         "regime": report.regime,
         "energy_error": _num(report.energy_error),
         "steps": {"total": report.num_steps, "rejected": report.num_rejected_steps},
-        "t_final_s": report.t_final,
+        "t_final_s": _num(report.t_final),
     }
 
 
@@ -153,11 +163,14 @@ def to_json(obj) -> str:
 
 # ------------------------------------------------------------------------------------------ table
 def _fmt(x, spec=".4f"):
-    return "—" if x is None or (isinstance(x, float) and not math.isfinite(x)) else format(x, spec)
+    if x is None:
+        return "—"
+    x = float(x)
+    return "—" if not math.isfinite(x) else format(x, spec)
 
 
 def _err(rigid, sim):
-    if rigid is None:
+    if rigid is None or sim is None or not (math.isfinite(rigid) and math.isfinite(sim)) or sim == 0:
         return ""
     return f"  ({(rigid - sim) / sim:+.2%} vs Hertz)"
 
@@ -168,8 +181,13 @@ def summary_table(report: Report, title: str | None = None) -> str:
     lines = []
     if title:
         lines += [title, "=" * len(title)]
-    lines.append(f"status: {r.status}   t_final = {r.t_final * 1e3:.4g} ms   steps = {r.num_steps} "
-                 f"({r.num_rejected_steps} rejected)   energy error = {r.energy_error:.2e}")
+    lines.append(f"status: {r.status.text}   t_final = {_fmt(r.t_final * 1e3, '.4g')} ms   steps = "
+                 f"{r.num_steps} ({r.num_rejected_steps} rejected)   energy error = {_fmt(r.energy_error, '.2e')}")
+    if not r.status.ok:
+        lines.append(f"PARTIAL RESULTS ({r.status.text}): {r.status.hint()}; the gains below are not "
+                     "those of a finished cascade")
+    if math.isfinite(r.cascade_end_time):
+        lines.append(f"first cascade ended at {r.cascade_end_time * 1e3:.4g} ms")
     lines.append(f"drop speed {r.drop_speed:.4g} m/s, {len(r.masses)} masses "
                  f"({', '.join(f'{m:.4g}' for m in r.masses)} kg)")
     lines.append("")
@@ -209,6 +227,17 @@ def summary_table(report: Report, title: str | None = None) -> str:
                      f"{r.top_srs.frequencies_Hz[k]:,.0f} Hz")
     lines.append(f"regime: {r.regime} (neighbouring contacts overlap {r.independence:.1%} of the "
                  "shorter contact time; the rigid theory assumes 0%)")
+    if r.rebounds:
+        lines.append("")
+        lines.append(f"rebounds after the first cascade (kept out of the gains): {len(r.rebounds)}")
+        for ep in r.rebounds[:10]:
+            label = "ground-1" if ep.interface == 0 else f"{ep.interface}-{ep.interface + 1}"
+            lines.append(f"  t = {ep.start * 1e3:.4g} ms  {label:<9} approach {ep.approach_velocity:.4g} m/s, "
+                         f"separation {_fmt(ep.separation_velocity, '.4g')} m/s")
+        if len(r.rebounds) > 10:
+            lines.append(f"  ... and {len(r.rebounds) - 10} more (--json lists them all)")
+    for w in r.warnings:
+        lines.append(f"warning: {w}")
     return "\n".join(lines)
 
 
@@ -251,7 +280,8 @@ def to_dataset(report: Report):
         data["srs_maximax"] = (("frequency",), report.top_srs.maximax, {"units": "g", "Q": report.top_srs.Q})
         data["srs_primary"] = (("frequency",), report.top_srs.primary, {"units": "g"})
         data["srs_residual"] = (("frequency",), report.top_srs.residual, {"units": "g"})
-    attrs = {k: v for k, v in to_dict(report).items() if isinstance(v, (str, int, float)) and v is not None}
+    attrs = {k: (int(v) if isinstance(v, bool) else v) for k, v in to_dict(report).items()
+             if isinstance(v, (str, int, float)) and v is not None}
     attrs["rigid_json"] = json.dumps(to_dict(report)["rigid"])
     attrs["conventions"] = ("SI units; masses numbered from the bottom; interface 0 = ground-mass 1, "
                             "interface j = mass j - mass j+1")

@@ -21,12 +21,16 @@ ground–mass 1, interface `j` = mass `j` – mass `j+1` (array indices `j−1`,
   resolved as ground–1, then 1–2, … and any re-collision at that instant).
 * *Approach.* Two bodies collide only if they touch and close at a speed above `1e-12 × v_scale`
   (`v_scale` = the largest initial speed, or 1): round-off never creates spurious impacts.
-* *Stopping.* The cascade is over — normal return — as soon as the system *separates*: every pair has
-  `v_{j+1} − v_j >= 0` and, with a ground, `v_1 >= 0` (checked at `t = 0` and after every impact, with
-  the tolerance above). Later ballistic returns under gravity (mass 1 falling back to the ground after
-  the cascade, the top mass falling back) are a new drop and are not followed. A stack released from
-  rest above the ground therefore counts as separated at `t = 0`: start a dropped stack with its
-  impact velocity (`v_i = −v_ff`, `gaps[0] = 0`) or any `v_1 < 0`.
+* *Stopping.* The cascade is over — normal return — as soon as the system *separates* after at least
+  one impact: every pair has `v_{j+1} − v_j >= 0` and, with a ground, `v_1 >= 0` or mass 1 held on the
+  ground (checked after every impact, with the tolerance above) — the same rule as the compliant
+  simulator's (`hertz_chain.simulate`). A stack released at rest above the ground, or thrown upward,
+  is followed until it has landed and separated; one where nothing ever meets raises `SolverError`
+  ("no contact"). Later ballistic returns under gravity (mass 1 falling back to the ground after the
+  cascade) are a new drop and are not followed.
+* *The top mass's apex.* Under gravity, an impact on the top mass after it has passed the apex of its
+  flight from its last impact (it lands again) is a rebound: it changes the velocities but no launch
+  velocity (as in the compliant simulator, whose top interface is then frozen).
 * *Ground support.* Mass 1 at the ground with zero velocity under gravity is held by the ground (it
   does not sink) while the bodies above move; a second body *resting* on it with zero relative
   velocity under gravity (resting contact) is outside the impulsive model and raises `SolverError`.
@@ -202,6 +206,7 @@ def simulate_rigid(
     launch_t = np.zeros(n)
     log: list[tuple] = []
     t = 0.0
+    top_hit = False  # the top mass has had an impact (its apex is then launch_t + launch_v / g)
 
     def held() -> bool:
         return ground and g > 0 and gp[0] == 0.0 and abs(v[0]) <= vtol
@@ -226,6 +231,8 @@ def simulate_rigid(
         return err
 
     def separated() -> bool:
+        if not log:
+            return False  # nothing has happened yet: a run must run
         if n > 1 and np.any(np.diff(v) < -vtol):
             return False
         return not (ground and v[0] < -vtol)
@@ -255,6 +262,9 @@ def simulate_rigid(
                 "gap or a closing velocity"
             )
         dt = float(np.min(times))
+        if not np.isfinite(dt) and not log:
+            raise fail(f"rigid simulation: no contact: nothing ever meets (velocities {v.tolist()}, "
+                       f"gravity {g} m/s²)")
         if not np.isfinite(dt):  # cannot happen while not separated; guard against hangs anyway
             raise fail(
                 f"rigid simulation: bodies approach but no contact is predicted at t = {t:.6g} s after "
@@ -290,11 +300,16 @@ def simulate_rigid(
         else:
             a_, b_ = k - 1, k
             va, vb = v[a_], v[b_]
+            # the top mass lands again after the apex of its flight: a rebound, no launch
+            landed = (k == n - 1 and g > 0 and top_hit and launch_v[b_] > 0
+                      and t > launch_t[b_] + launch_v[b_] / g)
             dv = (1.0 + e_pair[k - 1]) * (vb - va) / (m[a_] + m[b_])
             v[a_], v[b_] = va + m[b_] * dv, vb - m[a_] * dv
             before, after = (va, vb), (v[a_], v[b_])
-            launch_v[a_], launch_v[b_] = v[a_], v[b_]
-            launch_t[a_] = launch_t[b_] = t
+            if not landed:
+                launch_v[a_], launch_v[b_] = v[a_], v[b_]
+                launch_t[a_] = launch_t[b_] = t
+                top_hit = top_hit or k == n - 1
         log.append((t, k, before, after))
 
     return result()

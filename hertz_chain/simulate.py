@@ -122,6 +122,7 @@ from ._export import cached_jit
 from .contact import AbstractContactLaw
 from .errors import ParameterError, SolverError
 from .stack import Stack, State, at_impact, invert_monotone
+from .status import Status
 
 __all__ = [
     "Tolerances",
@@ -130,7 +131,7 @@ __all__ = [
     "Solution",
     "BatchSolution",
     "Restitution",
-    "STATUS",
+    "UNTIL",
     "UnrolledTsit5",
     "make_solver",
     "simulate",
@@ -141,9 +142,8 @@ __all__ = [
 
 HERTZ_TIME = 2.94328  # t_c = 2.94328 delta_max / v (Hertz; references.md)
 
-#: Status codes of a solve: index -> meaning.
-STATUS = ("cascade complete", "t_max reached", "max_steps reached", "solver failed (non-finite state)")
-COMPLETE, T_MAX, MAX_STEPS, FAILED = range(4)
+#: What `simulate(..., until=...)` accepts: stop at the end of the first cascade, or go on to `t_max`.
+UNTIL = ("cascade", "t_max")
 
 
 # ==================================================================== options
@@ -279,6 +279,7 @@ class _Config(eqx.Module):
     max_steps: int = eqx.field(static=True)
     adjoint: Any
     save_steps: bool = eqx.field(static=True)
+    until: str = eqx.field(static=True, default="cascade")
 
 
 # ==================================================================== scales
@@ -294,18 +295,32 @@ class Scales(eqx.Module):
         return jnp.concatenate([jnp.full(n, self.length), jnp.full(n, self.velocity), jnp.full(n, self.energy)])
 
 
-def _scales(stack: Stack, state: State) -> Scales:
-    """Contact time and peak overlap of the stiffest contact at the drop speed (module docstring)."""
-    stack, state = jax.lax.stop_gradient((stack, state))
+def _speed(stack: Stack, state: State) -> Array:
+    """The velocity scale `V`: the largest initial speed or relative speed; for a stack released at
+    rest, the speed of a fall through its whole height under gravity; 1 m/s if nothing would move."""
     x, v = state.positions, state.velocities
     mask = stack.interface_mask()
     rel = jnp.where(mask, jnp.abs(stack.overlap_rates(v)), 0.0)
     vel = jnp.maximum(jnp.max(jnp.abs(v)), jnp.max(rel))
-    vel = jnp.where(vel > 0, vel, 1.0)
+    height = jnp.max(x) - jnp.minimum(jnp.min(x), 0.0)
+    fall = jnp.sqrt(2.0 * stack.gravity * height)
+    return jnp.where(vel > 0, vel, jnp.where(fall > 0, fall, 1.0))
+
+
+def _peak_overlaps(stack: Stack, vel) -> Array:
+    """`(n,)` peak overlap of every interface hit at `vel` (the root of `potential(delta) = m* vel^2/2`,
+    Hertz: `(5 m* vel^2/(4k))^{2/5}`); inf where there is no interface."""
+    mask = stack.interface_mask()
     target = 0.5 * stack.effective_masses() * vel**2
     fn = lambda d: jnp.where(mask, stack.potentials(d), d)  # noqa: E731
-    dmax = jnp.where(mask, invert_monotone(fn, jnp.where(mask, target, 1.0)), jnp.inf)
-    length = jnp.min(dmax)
+    return jnp.where(mask, invert_monotone(fn, jnp.where(mask, target, 1.0)), jnp.inf)
+
+
+def _scales(stack: Stack, state: State) -> Scales:
+    """Contact time and peak overlap of the stiffest contact at the drop speed (module docstring)."""
+    stack, state = jax.lax.stop_gradient((stack, state))
+    vel = _speed(stack, state)
+    length = jnp.min(_peak_overlaps(stack, vel))
     return Scales(
         time=HERTZ_TIME * length / vel,
         length=length,
@@ -314,9 +329,34 @@ def _scales(stack: Stack, state: State) -> Scales:
     )
 
 
+def _default_t_max(stack: Stack, state: State, sc: Scales) -> Array:
+    """A time limit (s) that covers the first cascade, from the physics (issue 16):
+
+    `t_fall + 2 sum_j t_gap,j + 200 sum_j t_c,j + 4 V/g`, where `t_fall` is when mass 1 reaches the
+    ground in free flight (0 without the ground or when it never does), `t_gap,j = min(s_j/V,
+    sqrt(2 s_j/g))` the time to close gap `s_j` at the drop speed `V` or by falling from rest,
+    `t_c,j = 2.94328 delta_max,j / V` the Hertz contact time estimate of interface `j` (its own
+    effective mass; Johnson 1985, §11.1), and `4 V/g` two times of flight of a mass thrown up at `V`
+    (mass 1's bounces on the ground during the cascade). The solve stops at the cascade's end, so a
+    generous limit costs nothing when the cascade ends."""
+    stack, state = jax.lax.stop_gradient((stack, state))
+    g, V = stack.gravity, sc.velocity
+    x, v = state.positions, state.velocities
+    x1, v1 = jnp.maximum(x[0], 0.0), v[0]
+    g_safe = jnp.where(g > 0, g, 1.0)
+    fall_g = (v1 + jnp.sqrt(v1**2 + 2.0 * g * x1)) / g_safe
+    fall_0 = jnp.where(v1 < 0, x1 / jnp.where(v1 < 0, -v1, 1.0), 0.0)
+    t_fall = jnp.where(stack.ground, jnp.where(g > 0, fall_g, fall_0), 0.0)
+    gaps = jnp.maximum(jnp.diff(x), 0.0)
+    t_gap = jnp.minimum(gaps / V, jnp.where(g > 0, jnp.sqrt(2.0 * gaps / g_safe), jnp.inf))
+    t_c = jnp.where(stack.interface_mask(), HERTZ_TIME * _peak_overlaps(stack, V) / V, 0.0)
+    flight = jnp.where(g > 0, 4.0 * V / g_safe, 0.0)
+    return t_fall + 2.0 * jnp.sum(t_gap) + 200.0 * jnp.sum(t_c) + flight
+
+
 # ==================================================================== the compiled solve
 def _scaled_field(t, ys, args):
-    stack, scale, T = args
+    stack, scale, T = args[:3]
     n3 = scale.shape[0]
     y = ys[:n3] * scale
     dy = T * stack.vector_field(t * T, y) / scale
@@ -329,13 +369,38 @@ def _scaled_field(t, ys, args):
     return jnp.concatenate([dy, z])
 
 
-def _cascade_complete(t, ys, args, **kwargs):
-    """Event: no contact pushes, no pair approaches, mass 1 does not approach the ground."""
-    stack, scale, _ = args
-    x, v, _ = stack.split(ys[: scale.shape[0]] * scale)
+#: A scaled velocity that differs from free flight by more than this has felt a contact.
+_TOUCHED = 1e-9
+
+
+def _cascade_over(t, ys, args):
+    """The first cascade is over (issue 16's rule; README, "Statuses"): something has touched, every
+    contact between masses is open and no neighbours approach (their relative velocity stays constant
+    under a common gravity, so they never meet again), and mass 1 moves up from the ground or is bound
+    to it (`m_1 v_1^2/2 + P_0(delta_0) - m_1 g delta_0 < 0`: it cannot leave the ground unless pushed).
+    `args = (stack, scale, T, v0s)`, `v0s` the scaled initial velocities (contact has happened once a
+    velocity departs from free flight)."""
+    stack, scale, T, v0s = args
+    n = stack.n
+    y = ys[: scale.shape[0]] * scale
+    x, v, _ = stack.split(y)
     d, dd = stack.overlaps(x), stack.overlap_rates(v)
     mask = stack.interface_mask()
-    return jnp.all(jnp.where(mask, ~stack.in_contact(d, dd) & (dd <= 0), True))
+    closed = stack.in_contact(d, dd)
+    free_fall = v0s - stack.gravity * T * t / scale[n]
+    touched = jnp.any(jnp.abs(ys[n : 2 * n] - free_fall) > _TOUCHED)
+    pairs = jnp.all(jnp.where(mask & (jnp.arange(n) > 0), ~closed & (dd <= 0), True))
+    if not stack.ground:
+        return touched & pairs
+    m1 = stack.masses[0]
+    bound = (d[0] > 0) & (0.5 * m1 * v[0] ** 2 + stack.potentials(d)[0] - m1 * stack.gravity * d[0] < 0)
+    ground = (~closed[0] & (dd[0] <= 0)) | bound
+    return touched & pairs & ground
+
+
+def _cascade_complete(t, ys, args, **kwargs):
+    """diffrax event: `_cascade_over` (ends the solve at the first accepted step where it holds)."""
+    return _cascade_over(t, ys, args)
 
 
 class _Contacts(eqx.Module):
@@ -343,33 +408,55 @@ class _Contacts(eqx.Module):
     that launch velocities and the energy audit need no step history (a history of `max_steps` rows is
     the dominant cost of a vmapped solve, where every step selects over the whole buffer).
 
-    `rows (n, 4)`: per interface, the latest accepted point in contact (scaled time, -1 if never) and the
-    first accepted point after it (scaled time, SI overlap and overlap rate); `now (n,)`: in contact at
-    the latest point; `energy`: the energy at `t0` and the largest `|E - E(t0)|` so far (J), when
-    audited. Packed into few arrays: each array is a separate operation in every step of the loop.
+    `rows (n, 6)`: per interface, the latest accepted point in contact (scaled time, -1 if never) and the
+    first accepted point after it (scaled time, SI overlap, overlap rate, and the velocities of the lower
+    and upper body, 0 for the ground); `now (n,)`: in contact at the latest point; `cascade (n + 5,)`:
+    `[over, rebounds, t_c, top_done, v_top, v_c...]`: whether the first cascade is over (`_cascade_over` held
+    at an accepted point; `rows` and `now` are then frozen), whether any contact closed after that, its
+    scaled time `t_c`, whether the top mass has passed the apex of its flight after its last push (the
+    top interface is then frozen: a later landing is a rebound) and its velocity at the latest point
+    (scaled, to see it change sign), and the scaled velocities at `t_c`; `energy`: the
+    energy at `t0` and the largest `|E - E(t0)|` so far (J), when audited. Packed into few arrays: each
+    array is a separate operation in every step of the loop.
     """
 
     rows: Array
     now: Array
+    cascade: Array
     energy: tuple[Array, Array] | None
 
     @staticmethod
     def update(c: _Contacts | None, t, ys, args, audit: bool) -> _Contacts:
-        stack, scale, _ = args
+        stack, scale = args[:2]
+        n = stack.n
         y = ys[: scale.shape[0]] * scale
         x, v, _ = stack.split(y)
         d, dd = stack.overlaps(x), stack.overlap_rates(v)
         active = stack.in_contact(d, dd) & stack.interface_mask()
         e = stack.total_energy(y) if audit else None
+        v_top = ys[2 * n - 1]
         if c is None:
-            c = _Contacts(jnp.broadcast_to(jnp.asarray([-1.0, 0.0, 0.0, 0.0]), d.shape + (4,)),
-                          active & False, None if e is None else (e, 0.0 * e))
+            c = _Contacts(jnp.broadcast_to(jnp.asarray([-1.0, 0.0, 0.0, 0.0, 0.0, 0.0]), d.shape + (6,)),
+                          active & False, jnp.concatenate([jnp.zeros(4), v_top[None], ys[n : 2 * n]]),
+                          None if e is None else (e, 0.0 * e))
+        was_over, top_done = c.cascade[0] > 0, c.cascade[3] > 0
+        frozen = was_over | ((jnp.arange(n) == n - 1) & top_done)
         left = c.now & ~active
         t = jnp.broadcast_to(t, d.shape).astype(d.dtype)
-        rows = jnp.where(jnp.stack([active, left, left, left], axis=-1), jnp.stack([t, t, d, dd], axis=-1), c.rows)
+        v_lo = jnp.concatenate([jnp.zeros(1, v.dtype), v[:-1]])
+        rows = jnp.where(jnp.stack([active] + [left] * 5, axis=-1) & ~frozen[:, None],
+                         jnp.stack([t, t, d, dd, v_lo, v], axis=-1), c.rows)
+        now = jnp.where(frozen, c.now, active)
+        over = _cascade_over(t[0], ys, args) & ~was_over
+        # the top mass's apex: free, pushed before, its velocity turned from up to down
+        apex = ~active[n - 1] & (rows[n - 1, 0] >= 0) & (c.cascade[4] > 0) & (v_top <= 0)
+        rebound = (c.cascade[1] > 0) | jnp.any(frozen & active)
+        head = jnp.stack([(was_over | over), rebound, jnp.where(over, t[0], c.cascade[2]),
+                          top_done | apex | over, v_top]).astype(d.dtype)
+        cascade = jnp.concatenate([head, jnp.where(over, ys[n : 2 * n], c.cascade[5:])])
         if e is not None:  # elementwise, not `.at[].max`: a scatter is a slow unfused operation in the loop
             e = (c.energy[0], jnp.maximum(c.energy[1], jnp.abs(e - c.energy[0])))
-        return _Contacts(rows, active, e)
+        return _Contacts(rows, now, cascade, e)
 
 
 class _Tracked(dfx.AbstractWrappedSolver):
@@ -466,13 +553,22 @@ def _end_of_contacts(stack: Stack, c: _Contacts, time_scale, t_final):
     return jnp.where(ended, t_r + s_star, jnp.where(ever, t_final, jnp.nan))
 
 
-def _launch(stack: Stack, t_end_if, t_final, v_final):
-    """Per mass: the end of its last contact, and its velocity then (free flight since)."""
-    below = t_end_if
+def _launch(stack: Stack, c: _Contacts, time_scale, t_end_if, t_final, v_final):
+    """Per mass: the end of its last push (the later end of its two interfaces), and its velocity then:
+    the velocity recorded at the first accepted point after that contact (`_Contacts.rows`), taken back
+    to the contact's end in free flight (`v + g (t_r - t_end)`, exact: the mass is free in between). A
+    mass still pushed at the end: its final velocity. NaN for a mass never pushed."""
+    n = stack.n
     above = jnp.concatenate([t_end_if[1:], jnp.full(1, jnp.nan)])
-    both = jnp.stack([below, above])
-    t_end = jnp.where(jnp.all(jnp.isnan(both), axis=0), jnp.nan, jnp.nanmax(jnp.where(jnp.isnan(both), -jnp.inf, both), axis=0))
-    return t_end, v_final + stack.gravity * (t_final - t_end)
+    use_above = jnp.isfinite(above) & (jnp.isnan(t_end_if) | (above > t_end_if))
+    t_end = jnp.where(use_above, above, t_end_if)
+    j = jnp.where(use_above, jnp.arange(n) + 1, jnp.arange(n))  # the interface of the last push
+    jc = jnp.minimum(j, n - 1)
+    rec_v = jnp.where(use_above, c.rows[jc, 4], c.rows[jc, 5])
+    t_r = c.rows[jc, 1] * time_scale
+    pushed_now = c.now[jc]
+    v_launch = jnp.where(pushed_now, v_final, rec_v + stack.gravity * (t_r - t_end))
+    return t_end, jnp.where(jnp.isnan(t_end), jnp.nan, v_launch)
 
 
 def _derived(stack: Stack, y):
@@ -492,9 +588,7 @@ def _setup(stack: Stack, state: State, t_max, cfg: _Config):
     sc = _scales(stack, state)
     scale = sc.vector(n)
     y0 = state.flat()
-    span = jnp.max(state.positions) - jnp.min(state.positions)
-    t_auto = 200.0 * n * sc.time + 4.0 * span / sc.velocity
-    t1 = jnp.where(jnp.isnan(t_max), t_auto, t_max)
+    t1 = jnp.where(jnp.isnan(t_max), _default_t_max(stack, state, sc), t_max)
     y0s = jnp.concatenate([y0 / scale, jnp.zeros(n)]) if cfg.tolerances.resolve_onsets else y0 / scale
     return sc, scale, y0s, t1 / sc.time
 
@@ -515,10 +609,10 @@ def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _Config, history: 
         t1=t1s,
         dt0=cfg.tolerances.first_step,
         y0=y0s,
-        args=(stack, scale, T),
+        args=(stack, scale, T, y0s[stack.n : 2 * stack.n]),
         saveat=dfx.SaveAt(subs=subs, solver_state=True),
         stepsize_controller=cfg.tolerances.controller(),
-        event=dfx.Event(_cascade_complete),
+        event=dfx.Event(_cascade_complete) if cfg.until == "cascade" else None,
         max_steps=cfg.max_steps,
         adjoint=cfg.adjoint,
         throw=False,
@@ -526,31 +620,52 @@ def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _Config, history: 
 
 
 def _core(sol) -> dict:
-    """What every solve reports: final scaled time and state, the contacts' bookkeeping, status, steps."""
+    """What every solve reports: final scaled time and state, the contacts' bookkeeping, status, steps.
+
+    The status (`hertz_chain.status.Status`): the event (the cascade is over) or, with `until="t_max"`,
+    an accepted point where it was over: complete (with rebounds if a contact closed after it); else
+    `t_max` or `max_steps` first: incomplete, or no contact if nothing ever touched; a non-finite state
+    is checked in `_outputs`."""
+    c = sol.solver_state[1]
+    over, rebounds = c.cascade[0] > 0, c.cascade[1] > 0
+    touched = jnp.any(c.rows[:, 0] >= 0)
+    done = jnp.where(rebounds, Status.COMPLETE_WITH_REBOUNDS, Status.COMPLETE)
     status = jnp.where(
-        sol.result == dfx.RESULTS.event_occurred,
-        COMPLETE,
-        jnp.where(sol.result == dfx.RESULTS.successful, T_MAX,
-                  jnp.where(sol.result == dfx.RESULTS.max_steps_reached, MAX_STEPS, FAILED)),
+        (sol.result == dfx.RESULTS.event_occurred) | over, done,
+        jnp.where(sol.result == dfx.RESULTS.successful,
+                  jnp.where(touched, Status.INCOMPLETE_T_MAX, Status.NO_CONTACT),
+                  jnp.where(sol.result == dfx.RESULTS.max_steps_reached, Status.INCOMPLETE_MAX_STEPS,
+                            Status.FAILED)),
     )
-    return dict(t_fin=sol.ts[-1][-1], y_fin=sol.ys[-1][-1], contacts=sol.solver_state[1], status=status,
+    return dict(t_fin=sol.ts[-1][-1], y_fin=sol.ys[-1][-1], contacts=c, status=status,
                 num_steps=sol.stats["num_steps"], num_accepted_steps=sol.stats["num_accepted_steps"],
                 num_rejected_steps=sol.stats["num_rejected_steps"])
 
 
-def _outputs(stack: Stack, sc: Scales, scale, core: dict) -> dict:
-    """Launch data (in SI) from a solve's `_core`."""
-    n3 = 3 * stack.n
+def _outputs(stack: Stack, sc: Scales, scale, core: dict, until: str = "cascade") -> dict:
+    """Launch data (in SI) from a solve's `_core` (`_end_of_contacts`, `_launch`). A mass still pushed
+    when the cascade ended (mass 1 resting on the ground) is given its velocity then: the final state
+    of a solve stopped by the event (`until="cascade"`; it carries the reverse-mode cotangent), the
+    velocities kept in `_Contacts.cascade` otherwise."""
+    n, n3 = stack.n, 3 * stack.n
     t_fin = core["t_fin"] * sc.time
     y_fin = core["y_fin"][:n3] * scale
-    t_end_if = _end_of_contacts(stack, core["contacts"], sc.time, t_fin)
     v_fin = stack.split(y_fin)[1]
-    t_end, v_launch = _launch(stack, t_end_if, t_fin, v_fin)
+    c = core["contacts"]
+    over = c.cascade[0] > 0
+    t_c, v_c = t_fin, v_fin
+    if until != "cascade":
+        t_c = jnp.where(over, c.cascade[2] * sc.time, t_fin)
+        v_c = jnp.where(over, c.cascade[5:] * scale[n : 2 * n], v_fin)
+    t_end_if = _end_of_contacts(stack, c, sc.time, t_c)
+    t_end, v_launch = _launch(stack, c, sc.time, t_end_if, t_c, v_c)
     status = core["status"]
-    status = jnp.where(jnp.all(jnp.isfinite(y_fin)) | (status == MAX_STEPS), status, FAILED)
+    status = jnp.where(jnp.all(jnp.isfinite(y_fin)) | (status == Status.INCOMPLETE_MAX_STEPS), status,
+                       Status.FAILED)
     return dict(
         status=status,
         t_final=t_fin,
+        cascade_end_time=jnp.where(over, c.cascade[2] * sc.time, jnp.nan),
         launch_velocities=v_launch,
         launch_times=t_end,
         contact_end_times=t_end_if,
@@ -567,7 +682,7 @@ def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, full: bool 
     sol = _diffeqsolve(stack, y0s, t1s, scale, sc.time, None if ts is None else ts / sc.time, cfg,
                        history=cfg.save_steps, audit=full and not cfg.save_steps)
     contacts = sol.solver_state[1]
-    out = _outputs(stack, sc, scale, _core(sol))
+    out = _outputs(stack, sc, scale, _core(sol), cfg.until)
     if not full:
         return out
     out["scales"] = sc
@@ -699,8 +814,9 @@ class Trajectory:
 class Solution:
     """The result of `simulate` (numpy arrays, SI units).
 
-    - `status`: one of `STATUS` (`"cascade complete"` or `"t_max reached"` for a successful solve);
-      `status_code` its index.
+    - `status`: a `Status` (`hertz_chain.status`: complete, complete with rebounds, incomplete, no
+      contact, failed); `status_code` its integer. The launch data are valid when `ok`.
+    - `cascade_end_time` (s): when the first cascade ended (`_cascade_over`), NaN if it did not.
     - `t_final` (s): when the solve stopped.
     - `launch_velocities` `(n,)` (m/s): the velocity of every mass when its last contact ended (NaN for
       a mass that was never in contact); `launch_times` `(n,)` (s): when that was.
@@ -715,9 +831,10 @@ class Solution:
     - `scales`: the `Scales` used; `stack`, `state`: the design and the initial state.
     """
 
-    status: str
+    status: Status
     status_code: int
     t_final: float
+    cascade_end_time: float
     launch_velocities: np.ndarray
     launch_times: np.ndarray
     final_velocities: np.ndarray
@@ -734,7 +851,7 @@ class Solution:
 
     @property
     def ok(self) -> bool:
-        return self.status_code in (COMPLETE, T_MAX)
+        return self.status.ok
 
     @property
     def gain(self) -> float:
@@ -752,6 +869,7 @@ class BatchSolution:
 
     status_code: np.ndarray
     t_final: np.ndarray
+    cascade_end_time: np.ndarray
     launch_velocities: np.ndarray
     launch_times: np.ndarray
     final_velocities: np.ndarray
@@ -768,11 +886,11 @@ class BatchSolution:
 
     @property
     def ok(self) -> np.ndarray:
-        return (self.status_code == COMPLETE) | (self.status_code == T_MAX)
+        return (self.status_code == Status.COMPLETE) | (self.status_code == Status.COMPLETE_WITH_REBOUNDS)
 
     @property
-    def status(self) -> list[str]:
-        return [STATUS[int(c)] for c in self.status_code]
+    def status(self) -> list[Status]:
+        return [Status(int(c)) for c in self.status_code]
 
     def __len__(self) -> int:
         return len(self.status_code)
@@ -787,14 +905,15 @@ class BatchSolution:
             pick(self.stack), pick(self.state))
 
 
-_SCALAR_KEYS = ("status_code", "t_final", "launch_velocities", "launch_times", "final_velocities",
+_SCALAR_KEYS = ("status_code", "t_final", "cascade_end_time", "launch_velocities", "launch_times", "final_velocities",
                 "contact_end_times", "num_steps", "num_accepted_steps", "num_rejected_steps", "energy_error")
 
 
 def _to_solution(out: dict, stack, state) -> Solution:
     code = int(out["status_code"])
     return Solution(
-        status=STATUS[code], status_code=code, t_final=float(out["t_final"]),
+        status=Status(code), status_code=code, t_final=float(out["t_final"]),
+        cascade_end_time=float(out["cascade_end_time"]),
         launch_velocities=np.asarray(out["launch_velocities"]),
         launch_times=np.asarray(out["launch_times"]),
         final_velocities=np.asarray(out["final_velocities"]),
@@ -808,7 +927,12 @@ def _to_solution(out: dict, stack, state) -> Solution:
 
 
 # ==================================================================== entry points
-def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, save_steps=True):
+def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, save_steps=True, until="cascade"):
+    if until not in UNTIL:
+        raise ParameterError("until", until, "'cascade' (stop when the first cascade ends) or 't_max' (go on "
+                             "to t_max and report later impacts as rebounds)")
+    if until == "t_max" and t_max is None:
+        raise ParameterError("t_max", None, "a time > 0 (s) with until='t_max'")
     if not isinstance(stack, Stack):
         raise ParameterError("stack", type(stack).__name__, "a hertz_chain.Stack")
     if not isinstance(state, State):
@@ -836,7 +960,7 @@ def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, sa
     tolerances = eqx.tree_at(lambda t: (t.rtol, t.atol), tolerances,
                              (np.asarray(float(tolerances.rtol)), np.asarray(float(tolerances.atol))))
     cfg = _Config(make_solver(solver, tolerances), tolerances, int(max_steps),
-                  _make_adjoint(adjoint, int(max_steps)), save_steps)
+                  _make_adjoint(adjoint, int(max_steps)), save_steps, until)
     return ts, t_max, cfg
 
 
@@ -845,14 +969,6 @@ def _describe(stack: Stack) -> str:
     laws = ", ".join(f"{type(law).__name__}@{list(idx)}" for law, idx in zip(stack.laws, stack.groups))
     return (f"n = {stack.n}, masses = {np.array2string(m, precision=4)} kg, laws = {laws}, "
             f"ground = {stack.ground}, g = {float(stack.gravity)} m/s²")
-
-
-def _hint(code: int, max_steps: int) -> str:
-    if code == MAX_STEPS:
-        return (f"increase max_steps (now {max_steps}), loosen rtol/atol, or shorten t_max; large gaps "
-                "cost ~2 steps per contact time of free flight (Tolerances.max_step)")
-    return ("the state became non-finite: check masses and contact parameters (positive, finite), "
-            "and try tighter tolerances or a smaller Tolerances.max_step")
 
 
 def simulate(
@@ -866,35 +982,41 @@ def simulate(
     max_steps: int = 65_536,
     adjoint: str | dfx.AbstractAdjoint | None = None,
     throw: bool = True,
+    until: str = "cascade",
 ) -> Solution:
-    """Simulate one design from an initial state until the cascade is complete (or `t_max`).
+    """Simulate one design from an initial state until its first cascade ends (or `t_max`).
 
     **Arguments:**
 
     - `stack`: the `Stack`; `state`: the initial `State` (`at_impact`, `dropped`, `resting`, or explicit).
     - `solver`: a name for `make_solver` or a diffrax solver (default Tsit5: see module docstring).
     - `tolerances`: `Tolerances` (default `rtol = atol = 1e-10` in scaled units).
-    - `t_max`: time limit (s); default `200 n T + 4 (x_max - x_min)/V` (`T` the contact-time scale).
+    - `t_max`: time limit (s); default from the physics (`_default_t_max`: the fall to the ground, the
+      falls through the gaps, the contact times and the time of flight), long enough for the cascade.
+    - `until`: `"cascade"` (default) stops when the first cascade is over (`Solution.cascade_end_time`);
+      `"t_max"` goes on to `t_max` (required then): later impacts (mass 1 falling back, masses landing
+      again) are rebounds, `status` says so, and the launch velocities stay those of the first cascade.
     - `ts`: optional times (s) at which to also report the state (dense output).
     - `max_steps`: step budget (default 65,536: the paper's ten-mass MET stack dropped under gravity,
       whose lower masses settle on the ground after the cascade, takes about 22,000 steps to the default
-      `t_max`; an unused step costs only memory, about 80 n bytes); `throw`: raise `SolverError` when the solve fails (max steps, non-finite
-      state); with `throw=False` read `Solution.status`.
+      `t_max`; an unused step costs only memory, about 80 n bytes); `throw`: raise `SolverError` when the
+      solver is in trouble (max steps before the cascade ended, non-finite state); otherwise, and with
+      `throw=False`, read `Solution.status` (incomplete at `t_max`, no contact).
 
     **Returns** a `Solution`. Compiled once per structure (n, law types, ground, solver, options); the
     compiled solve is kept in JAX's compilation cache and, under `EQX_ON_ERROR=nan` (the command line's
     setting), the traced one too (`hertz_chain._export`), so a new process skips both.
     """
-    ts, t_max, cfg = _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint)
+    ts, t_max, cfg = _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, until=until)
     if state.positions.shape != stack.masses.shape:
         raise ParameterError("state", state.positions.shape, f"positions of shape {stack.masses.shape}")
     out = _solve(stack, state, ts, t_max, cfg)
     out["scales"] = Scales(**out["scales"])
     out = _post_history(out, stack, batched=False)
     sol = _to_solution(out | {"status_code": out["status"]}, stack, state)
-    if throw and not sol.ok:
+    if throw and sol.status in (Status.INCOMPLETE_MAX_STEPS, Status.FAILED):
         raise SolverError(f"{sol.status} at t = {sol.t_final:.6g} s after {sol.num_steps} steps for the design "
-                          f"({_describe(stack)}); hint: {_hint(sol.status_code, max_steps)}")
+                          f"({_describe(stack)}); hint: {sol.status.hint(max_steps)}")
     return sol
 
 
@@ -908,6 +1030,7 @@ def simulate_batch(
     ts: ArrayLike | None = None,
     max_steps: int = 4096,
     save_steps: bool = True,
+    until: str = "cascade",
 ) -> BatchSolution:
     """Simulate a batch of designs of one structure in one compiled, vmapped solve.
 
@@ -926,7 +1049,7 @@ def simulate_batch(
     1024 designs, 2 cores, run of 2026-11-23 11:02): 0.37 ms/design without the history, 0.85 ms with it
     at `max_steps = 1024`.
     """
-    ts, t_max, cfg = _prepare(stacks, states, ts, t_max, solver, tolerances, max_steps, None, save_steps)
+    ts, t_max, cfg = _prepare(stacks, states, ts, t_max, solver, tolerances, max_steps, None, save_steps, until)
     if getattr(cfg.solver, "scan_kind", "") is None:
         # Runge–Kutta stages as a "bounded" loop: 15 % faster per design under vmap, but 50 % slower
         # for a single solve than diffrax's default (measured, Tsit5, 5 and 10 masses)
@@ -949,6 +1072,7 @@ def simulate_batch(
     np_ = lambda a: np.asarray(a)  # noqa: E731
     return BatchSolution(
         status_code=np_(out["status"]), t_final=np_(out["t_final"]),
+        cascade_end_time=np_(out["cascade_end_time"]),
         launch_velocities=np_(out["launch_velocities"]), launch_times=np_(out["launch_times"]),
         final_velocities=np_(out["final_velocities"]), contact_end_times=np_(out["contact_end_times"]),
         num_steps=np_(out["num_steps"]), num_accepted_steps=np_(out["num_accepted_steps"]),
@@ -989,7 +1113,8 @@ def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _Config):
     times frozen (as diffrax's controller does in reverse mode: it stops gradients through the step size),
     `lambda_{k-1} = (dPhi/dy)^T lambda_k + (cotangent of y_{k-1})` and `stack_bar += (dPhi/dstack)^T
     lambda_k`, each step's vector-Jacobian product by `jax.vjp` of the solver's own step. The outputs
-    that depend on the state are the final state and, per interface, the overlap and its rate at the first
+    that depend on the state are the final state and, per interface, the overlap, its rate and the two
+    bodies' velocities at the first
     accepted point after the last contact (`_Contacts.rows`); the step times carry no gradient."""
     del perturbed
     hist_t, hist_y, idx, valid = residuals
@@ -1000,13 +1125,15 @@ def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _Config):
     if g["y_fin"] is not None:
         ct_hist = ct_hist.at[N].add(g["y_fin"])
     rows_ct = g["contacts"].rows
-    if rows_ct is not None:  # overlap and rate at the recorded point: a linear function of that state
+    if rows_ct is not None:  # overlap, rate and velocities at the recorded point: linear in that state
         def at_rows(Y):
             x, v, _ = stack.split(Y[:, :n3] * scale)
-            return jnp.diagonal(stack.overlaps(x)), jnp.diagonal(stack.overlap_rates(v))
+            v_lo = jnp.concatenate([jnp.zeros(1, v.dtype), jnp.diagonal(v, offset=-1)])
+            return (jnp.diagonal(stack.overlaps(x)), jnp.diagonal(stack.overlap_rates(v)), v_lo,
+                    jnp.diagonal(v))
 
         _, vjp = jax.vjp(at_rows, hist_y[idx])
-        (ct_Y,) = vjp((rows_ct[:, 2], rows_ct[:, 3]))
+        (ct_Y,) = vjp((rows_ct[:, 2], rows_ct[:, 3], rows_ct[:, 4], rows_ct[:, 5]))
         ct_hist = ct_hist.at[idx].add(jnp.where(valid[:, None], ct_Y, 0.0))
     dyn, static = eqx.partition(stack, eqx.is_inexact_array)
     terms, solver = dfx.ODETerm(_scaled_field), cfg.solver
@@ -1038,9 +1165,9 @@ def _launch_impl(stack, state, t_max, cfg, replay: bool):
     else:
         out = _solve_impl(stack, state, None, t_max, cfg, full=False)
     v = eqx.error_if(
-        out["launch_velocities"], out["status"] >= MAX_STEPS,
-        "hertz_chain.launch_velocity: the solve failed (max_steps reached or non-finite state); "
-        "increase max_steps or check the design",
+        out["launch_velocities"], out["status"] > Status.COMPLETE_WITH_REBOUNDS,
+        "hertz_chain.launch_velocity: the cascade did not end (t_max or max_steps reached, no contact, "
+        "or a non-finite state); raise t_max or max_steps, or check the design",
     )
     return v
 

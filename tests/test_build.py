@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hertz_chain.status import Status
 from hertz_chain.build import build
 from hertz_chain.calibration import chi_from_restitution
 from hertz_chain.errors import StackFileError
@@ -106,7 +107,7 @@ def test_every_shipped_example_simulates_with_defaults(path):
     1e-8 of the energy scale at rtol = atol = 1e-10."""
     b = build(load_stack_file(path))
     sol = simulate(b.stack, b.state, **b.simulate_options)
-    assert sol.status in ("cascade complete", "t_max reached")
+    assert sol.ok
     assert float(sol.energy_error) < 1e-8
 
 

@@ -75,3 +75,49 @@ def test_overlap_rates_follow_the_interface_convention():
     # interface 0: -v1; interface j: v_j - v_{j+1} (notes/CONVENTIONS.md)
     np.testing.assert_array_equal(overlap_rates(v), [[1.0, 1.0, -5.0]])
     np.testing.assert_array_equal(overlap_rates(v, ground=False), [[0.0, 1.0, -5.0]])
+
+
+def test_one_contact_end_everywhere_clamped_tsuji():
+    # Issue 16: a contact ends where its force returns to zero, for the simulator's launch (and so
+    # `restitution()`), the episodes of the analysis, and the rigid comparison alike. Reference: an
+    # independent scipy integration (Radau, rtol 1e-12) of the same single impact, m = 1 kg on the ground,
+    # g = 0, F = k d^1.5 + eta sqrt(m k) d^0.25 d' clamped at F >= 0 (Tsuji, Tanaka & Ishida 1992),
+    # with a terminal event at F = 0 after the peak. For e = 0.5 the force returns to zero while
+    # d > 0, 21 % earlier than the overlap (the issue's measurement), so the two ends differ visibly.
+    from scipy.integrate import solve_ivp
+
+    import hertz_chain as hc
+
+    k, m, v0 = 1e9, 1.0, 1.0
+    law = hc.Tsuji.from_restitution(k, 0.5, m)
+    eta = float(law.eta)
+    c = eta * np.sqrt(m * k)
+
+    def rhs(t, y):
+        d, dd = y
+        f = max(k * max(d, 0.0) ** 1.5 + c * max(d, 0.0) ** 0.25 * dd, 0.0)
+        return [dd, -f / m]
+
+    def force_zero(t, y):
+        d, dd = y
+        return k * d**1.5 + c * d**0.25 * dd if d > 0 else d
+
+    force_zero.terminal, force_zero.direction = True, -1
+    t_guess = 10 * 2.94328 * (5 * m * v0**2 / (4 * k)) ** 0.4 / v0
+    ref = solve_ivp(rhs, (0, t_guess), [1e-30, v0], method="Radau", rtol=1e-12, atol=1e-20,
+                    events=force_zero, first_step=1e-12)
+    t_end_ref, v_end_ref = float(ref.t_events[0][0]), float(-ref.y_events[0][0][1])
+    d_end_ref = float(ref.y_events[0][0][0])
+    assert d_end_ref > 0  # the clamped contact lets go before the overlap closes
+
+    measured = hc.restitution(law, v0, m)
+    assert measured.contact_time == pytest.approx(t_end_ref, rel=1e-7)
+    assert measured.e == pytest.approx(v_end_ref / v0, rel=1e-7)
+    stack = hc.Stack([m], [law], gravity=0.0)
+    sol = hc.simulate(stack, hc.at_impact(stack, v0), tolerances=hc.Tolerances(1e-11, 1e-11))
+    report = hc.analyse(sol)
+    (ep,) = report.episodes
+    assert ep.start == pytest.approx(0.0, abs=1e-12 * t_end_ref)
+    assert ep.end == pytest.approx(t_end_ref, rel=1e-7)
+    assert ep.end == pytest.approx(float(sol.contact_end_times[0]), rel=1e-9)
+    assert ep.restitution == pytest.approx(v_end_ref / v0, rel=1e-7)

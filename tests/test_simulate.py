@@ -7,6 +7,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.special import beta
 
+from hertz_chain.status import Status
 from hertz_chain.analysis import analyse
 from hertz_chain.contact import Hertz, HuntCrossley, KelvinVoigt, Tsuji
 from hertz_chain.errors import ParameterError, SolverError
@@ -67,7 +68,7 @@ def test_newtons_cradle_published_velocities_momentum_energy():
     # first at v0 = 1: final velocities (-0.07095, 0.07640, 0.99455).
     stack = Stack([1.0, 1.0, 1.0], Hertz(1.0), gravity=0.0, ground=False)
     sol = simulate(stack, State([0.0, 0.0, 0.0], [1.0, 0.0, 0.0]), tolerances=TIGHT)
-    assert sol.status == "cascade complete"
+    assert sol.status == Status.COMPLETE
     np.testing.assert_allclose(sol.final_velocities, [-0.07095, 0.07640, 0.99455], atol=5e-6)
     # momentum (Newton's third law, no ground, no gravity) to 1e-10 at every step
     p = sol.steps.velocities @ np.ones(3)
@@ -136,7 +137,7 @@ def test_launch_velocity_corrects_free_flight_under_gravity():
     # the ground (x = 0, no elastic energy) at exactly the impact speed; afterwards v = v_launch - g t.
     stack = Stack([0.2], Hertz(5e8), gravity=G)
     sol = simulate(stack, at_impact(stack, 1.3), tolerances=TIGHT)
-    assert sol.status == "cascade complete"
+    assert sol.status == Status.COMPLETE
     assert sol.launch_velocities[0] == pytest.approx(1.3, rel=1e-9)
     # the solve ends a little after the contact, so the free-flight correction v_launch - v_final =
     # g (t_final - t_end) is far larger than the 1e-9 accuracy asserted above: without it the test fails
@@ -186,7 +187,7 @@ def test_resting_stack_stays_at_rest():
     # Reference: static equilibrium: a resting stack (state c, h = 0) has zero acceleration at t = 0.
     stack = Stack(_mvg(4), Hertz(1e9), gravity=G)
     sol = simulate(stack, resting(stack), tolerances=TIGHT, t_max=1e-3, max_steps=2000)
-    assert sol.status == "t_max reached"
+    assert sol.status == Status.INCOMPLETE_T_MAX
     np.testing.assert_allclose(sol.steps.accelerations[0], 0.0, atol=1e-9 * G)
     np.testing.assert_allclose(sol.steps.velocities[-1], 0.0, atol=1e-9)
 
@@ -251,7 +252,7 @@ def test_batch_equals_individual_and_isolates_failure():
     batch = simulate_batch(stack_designs(stacks), jax.tree.map(lambda *x: jnp.stack(x), *states),
                            tolerances=TIGHT, max_steps=3000, ts=grid)
     assert list(batch.ok) == [True, True, False]
-    assert batch.status[2] == "max_steps reached"
+    assert batch.status[2] == Status.INCOMPLETE_MAX_STEPS
     for i in range(2):
         one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=3000, ts=grid)
         # batched kernels round differently, so the step sequences drift apart: agreement is to the
