@@ -56,22 +56,30 @@ when a damped stack needs 1e-7 everywhere).
 onset), and a largest step of `max_step` contact times (default 0.5) so that a free flight never steps
 over a whole contact.
 
-**Stopping.** A boolean `diffrax.Event` ends the solve when the cascade is complete: no contact pushes,
-no pair of masses approaches, and mass 1 does not approach the ground. Otherwise the solve runs to
-`t_max` and `status` says so. (With gravity and a bottom mass that settles on the ground the cascade never
-"completes"; the launch velocities of the masses that have left are still exact.)
+**Stopping: the end of the first cascade.** The solve ends (a boolean `diffrax.Event`) at the first
+accepted step where the cascade is over (`_cascade_over`): something has touched (a velocity departs from
+free flight), every contact between masses is open and no neighbours approach, and mass 1 moves up from
+the ground or is bound to it (`m_1 v_1^2/2 + P_0(delta_0) - m_1 g delta_0 < 0`: it cannot leave the ground
+unless pushed). Under a common gravity the relative velocity of two free masses is constant, so after
+that only mass 1's return to the ground can start anything new: a rebound. With `until="t_max"` the
+solve goes on to `t_max`, the contact bookkeeping frozen at the cascade's end, and later contacts make the
+status "complete with rebounds". The top mass's launch is frozen earlier if it passes the apex of its
+flight before the cascade is over: its landing back on the stack is a rebound too. `t_max` defaults to a
+limit from the physics (`_default_t_max`); reaching it, or `max_steps`, first leaves the run
+"incomplete" (`hertz_chain.status.Status`).
 
-**Launch velocities.** The launch velocity of a mass is its velocity when its last contact ended. After
-that it flies freely, so `v_launch = v(t_final) + g (t_final - t_end)`. The end `t_end` is located inside
-the solver step where the contact force drops to zero by extrapolating both bodies in free flight from
-the step's end (exact when both are free there, the usual case) and solving `G(t) = 0` for the
-separation function `G` of `Stack.separation_function`: bisection, then one Newton step for the
-derivative (implicit function theorem), so the launch velocity is differentiable. With `g = 0` it is the
-final velocity. The bracketing points (per interface, the last accepted step in contact and the first after
-it) and the energy audit are kept while solving, in the solver state of a wrapper around the diffrax
-solver (`_Tracked`; diffrax keeps the state of accepted steps only), so no step history is needed:
-`launch_velocity` and `simulate_batch(..., save_steps=False)` save none, and their cost per step does not
-grow with `max_steps`.
+**Launch velocities.** The launch velocity of a mass is its velocity when its last push of the first
+cascade ended: the contact force of its last contact returned to zero (the one definition of a contact's
+end, shared by `hertz_chain.episodes`, the pulses and `restitution`). The end `t_end` is located inside
+the solver step where the force drops to zero by extrapolating both bodies in free flight from the
+first accepted point after it and solving `G(t) = 0` for the separation function `G` of
+`Stack.separation_function`: bisection, then one Newton step for the derivative (implicit function
+theorem), so the launch velocity is differentiable. The velocity of each body at that accepted point is
+recorded, and `v_launch = v(t_r) + g (t_r - t_end)` (free flight in between: exact). The bracketing
+points, the recorded velocities and the energy audit are kept while solving, in the solver state of a
+wrapper around the diffrax solver (`_Tracked`; diffrax keeps the state of accepted steps only), so no
+step history is needed: `launch_velocity` and `simulate_batch(..., save_steps=False)` save none, and
+their cost per step does not grow with `max_steps`.
 
 **Batches.** `simulate_batch` vmaps one compiled solve over the designs and, when there are several JAX
 devices, splits the designs over them (`jax.shard_map`); on a CPU, `hertz_chain` makes every core a
@@ -371,13 +379,38 @@ def _scaled_field(t, ys, args):
 
 #: A scaled velocity that differs from free flight by more than this has felt a contact.
 _TOUCHED = 1e-9
+#: A free group of masses whose internal energy is below this fraction of its drop energy has settled
+#: (`_cascade_over`): a slow inelastic collapse of the lower masses (e.g. a gapped MET stack without
+#: gravity) no longer holds the run; their velocities can still change by at most ~1e-3 V.
+_SETTLED = 1e-6
+#: A touching interface (overlap above `-sqrt(_QUIET) L`) whose relative kinetic plus elastic energy is
+#: below this fraction of `m* V^2/2` is quiet: its two masses move as one body (a settled clump), and at
+#: most `sqrt(_QUIET) V` = 1e-6 V of velocity is left to exchange.
+_QUIET = 1e-12
 
 
 def _cascade_over(t, ys, args):
-    """The first cascade is over (issue 16's rule; README, "Statuses"): something has touched, every
-    contact between masses is open and no neighbours approach (their relative velocity stays constant
-    under a common gravity, so they never meet again), and mass 1 moves up from the ground or is bound
-    to it (`m_1 v_1^2/2 + P_0(delta_0) - m_1 g delta_0 < 0`: it cannot leave the ground unless pushed).
+    """The first cascade is over (issue 16's rule; README, "The launch, the cascade and the statuses"):
+    something has touched, and for some `k` (0..n) the masses `1..k` rest on the ground while everything
+    above flies apart: every contact above mass `k` is open and no neighbours there approach (their
+    relative velocity stays constant under a common gravity, so they never meet again) or is quiet
+    (`_QUIET`: two masses that have settled into moving as one body), and
+
+    - `k = 0`: mass 1 is off the ground, or leaving it (`v_1 >= 0`);
+    - `k >= 1`: the masses `1..k` are bound to the ground: `sum_{i<=k} (m_i v_i^2/2 + m_i g x_i) +
+      sum_{j<k} P_j(delta_j) < 0`, below the energy of resting unloaded at `x = 0`. With the contact above
+      them open nothing adds energy to them (the ground does no work), so none of them can rise above
+      the depth of the static contact wells: they settle, and their contacts among themselves are
+      landings again (rebounds), never a push that reaches the masses flying apart above.
+
+    or (with mass 1 off the ground, or without a ground) a group of masses `1..k` flying freely has
+    settled (its internal energy `E_int`, kinetic in its centre-of-mass frame plus its inner contacts'
+    elastic energy, is below `_SETTLED` of its drop energy `M_k V^2/2`) and can never push mass `k+1`
+    again: mass `k+1` moves away from the group's centre of mass faster than any velocity `E_int` could
+    give the group's top mass, `sqrt(2 E_int (M_k - m_k)/(M_k m_k))`. Every mass above the group then
+    has its final launch; the masses of a settled or bound group report their velocities at the end of
+    the cascade (within `sqrt(_SETTLED) V` of any later value for a settled free group).
+
     `args = (stack, scale, T, v0s)`, `v0s` the scaled initial velocities (contact has happened once a
     velocity departs from free flight)."""
     stack, scale, T, v0s = args
@@ -386,16 +419,42 @@ def _cascade_over(t, ys, args):
     x, v, _ = stack.split(y)
     d, dd = stack.overlaps(x), stack.overlap_rates(v)
     mask = stack.interface_mask()
-    closed = stack.in_contact(d, dd)
+    closed = stack.in_contact(d, dd) & mask
     free_fall = v0s - stack.gravity * T * t / scale[n]
     touched = jnp.any(jnp.abs(ys[n : 2 * n] - free_fall) > _TOUCHED)
-    pairs = jnp.all(jnp.where(mask & (jnp.arange(n) > 0), ~closed & (dd <= 0), True))
+    # per interface: open and not approaching, or quiet (its relative kinetic and elastic energy below
+    # `_QUIET` of its drop energy: a clump of masses moving as one body), or absent
+    mu = stack.effective_masses()
+    touching = d > -jnp.sqrt(_QUIET) * scale[0]  # in contact, or within 1e-6 of the length scale
+    quiet = touching & (0.5 * mu * dd**2 + stack.potentials(d) <= _QUIET * 0.5 * mu * scale[n] ** 2)
+    # Between two free masses (and mass 1 and the ground) an approach slower than sqrt(_QUIET) V is
+    # round-off dust; the contact just above a group bound to the ground must not approach at all
+    # (its lower mass is held, so a mass falling onto it speeds up: that landing is still to come).
+    dust = jnp.sqrt(_QUIET) * scale[n]
+    apart = (~closed & (dd <= dust)) | quiet | ~mask
+    strict = (~closed & (dd <= 0)) | quiet | ~mask
+    # tail[k], k = 0..n: every interface j >= k + 1 is apart (vacuous for k >= n - 1)
+    tail = jnp.concatenate([jnp.flip(jnp.cumprod(jnp.flip(apart[1:]))) > 0, jnp.ones(2, bool)])
+    # A free group, masses 1..k (k = 1..n-1) off the ground: its internal energy (kinetic in its centre-of-
+    # mass frame plus its inner contacts' elastic energy) bounds how fast its top mass k can ever move
+    # relative to the group's centre of mass (gravity is common: the centre of mass frame is free fall);
+    # when mass k+1 already moves away faster than that, the group can never push it again.
+    m, pot = stack.masses, stack.potentials(d)
+    M, P = jnp.cumsum(m), jnp.cumsum(m * v)
+    inner = jnp.concatenate([jnp.zeros(1), jnp.cumsum(pot[1:])])  # interfaces 1..k-1
+    e_int = jnp.maximum(jnp.cumsum(0.5 * m * v**2) - 0.5 * P**2 / M + inner, 0.0)
+    reach = jnp.sqrt(2.0 * e_int * (M - m) / (M * m))
+    settled = e_int <= _SETTLED * 0.5 * M * scale[n] ** 2  # its internal motion is negligible
+    escapes = (~closed[1:] & settled[:-1] & (v[1:] - (P / M)[:-1] >= reach[:-1])) & tail[1:n]  # k = 1..n-1
+    free = tail[0] | jnp.any(escapes)
     if not stack.ground:
-        return touched & pairs
-    m1 = stack.masses[0]
-    bound = (d[0] > 0) & (0.5 * m1 * v[0] ** 2 + stack.potentials(d)[0] - m1 * stack.gravity * d[0] < 0)
-    ground = (~closed[0] & (dd[0] <= 0)) | bound
-    return touched & pairs & ground
+        return touched & free
+    # above[k], k = 0..n: the masses above mass k fly apart (k >= 1: interface k strictly)
+    above = tail & jnp.concatenate([jnp.ones(1, bool), strict[1:], jnp.ones(1, bool)])
+    mech = m * (0.5 * v**2 + stack.gravity * x)
+    energy = jnp.cumsum(mech) + jnp.cumsum(pot)  # masses 1..k and their contacts, k = 1..n
+    bound = jnp.any((energy < 0) & above[1:])
+    return touched & ((apart[0] & free) | bound)
 
 
 def _cascade_complete(t, ys, args, **kwargs):

@@ -148,7 +148,12 @@ def test_free_fall_and_ground_bounce_under_gravity():
     # One mass dropped from rest at h: impact at sqrt(2h/g) with speed sqrt(2gh), rebound e0 times that.
     h, g, e0 = 0.05, 9.80665, 0.6
     r = simulate_rigid([2.0], [0.0], [h], 1.0, ground_restitution=e0, gravity=g)
-    # released from rest the system is already separated (module rule); start it falling instead
+    # released from rest the run still runs (issue 16): it falls, lands and bounces once
+    assert r.n_collisions == 1
+    assert r.collisions["time"][0] == pytest.approx(math.sqrt(2 * h / g), rel=1e-12)
+    assert r.launch_velocities[0] == pytest.approx(e0 * math.sqrt(2 * g * h), rel=1e-12)
+    # separating from the start with nothing to meet (no gravity): no contact, no collision
+    r = simulate_rigid([2.0, 1.0], [0.1, 0.2], [0.0, 0.01], 1.0, ground_restitution=e0, gravity=0.0)
     assert r.n_collisions == 0
     r = simulate_rigid([2.0], [-1e-9], [h], 1.0, ground_restitution=e0, gravity=g)
     v_imp = math.sqrt(1e-18 + 2 * g * h)
