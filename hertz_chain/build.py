@@ -202,6 +202,8 @@ def _build(spec: StackSpec) -> Built:
         options["t_max"] = s.t_max
     if s.max_steps is not None:
         options["max_steps"] = s.max_steps
+    if s.until != "cascade":
+        options["until"] = s.until
     return Built(stack=stack, state=state, masses=m, nominal_restitution=e_nom, laws=tuple(laws),
                  simulate_options=options, n_output=s.n_output, dt_output=s.dt_output, title=spec.title)
 

@@ -7,8 +7,28 @@ Commands:
   file and compare with the rigid model.
 - `hertz-chain demo` — the paper's optimal six-mass MVG stack, gapped and touching.
 
-Every user error (bad file, bad parameter) prints one line to stderr and exits with status 2, with no
-traceback. Heavy imports (JAX, diffrax, matplotlib) happen inside the commands, so `--help` is instant.
+Every user error (bad file, bad parameter, bad path, unknown command or flag, missing argument) prints
+one line `hertz-chain: error: ...` to stderr, naming the key or flag, the value and what is allowed, and
+exits with status 2, with no traceback. Output paths (`--output`, `--plot`) are checked before anything
+is simulated (`hertz_chain._paths`) and written atomically after it: an existing file is never replaced
+without `--force`, and of two runs writing the same file one wins and the other fails with one line.
+Heavy imports (JAX, diffrax, matplotlib) happen inside the commands, so `--help` and the usage errors
+answer at once.
+
+Exit status (`hertz_chain.status.Status.exit_code`):
+
+| status | meaning |
+|---|---|
+| 0 | the run completed (`complete`, `complete with rebounds`); `--help` |
+| 2 | bad input: a stack file, flag, value or output path refused before anything ran; a usage error |
+| 3 | incomplete: `t_max` or `max_steps` came before the cascade ended (partial results are written) |
+| 4 | no contact: nothing touched before `t_max` |
+| 5 | failed: the solver produced a non-finite state |
+
+After a run that is not `ok` the table/JSON and the outputs are still written (marked partial), then one
+line `hertz-chain: <status>: <hint>` goes to stderr. Each warning of the run is one line
+`hertz-chain: warning: ...` on stderr. Running `hertz-chain` without arguments prints the help and exits
+with status 2.
 """
 
 from __future__ import annotations
@@ -20,7 +40,13 @@ from typing import Optional
 
 import typer
 
-from .errors import HertzChainError
+from .errors import HertzChainError, SolverError
+from .status import EXIT_BAD_INPUT, Status
+
+try:  # the parser's own errors (typer >= 0.20 vendors click; older versions use click itself)
+    from typer._click.exceptions import ClickException as _ClickException
+except ImportError:  # pragma: no cover
+    from click.exceptions import ClickException as _ClickException
 
 app = typer.Typer(
     add_completion=False,
@@ -32,9 +58,65 @@ app = typer.Typer(
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
+OUTPUT_SUFFIXES = (".nc", ".csv")
+PLOT_SUFFIXES = (".png",)
+
+
+def _one_line(text: object) -> str:
+    return " ".join(str(text).split())
+
+
 def _fail(message: str) -> None:
-    typer.echo(f"hertz-chain: error: {message}", err=True)
-    raise typer.Exit(code=2)
+    typer.echo(f"hertz-chain: error: {_one_line(message)}", err=True)
+    raise typer.Exit(code=EXIT_BAD_INPUT)
+
+
+def _check_number(value: float | None, flag: str, lo: float, hi: float, allowed: str) -> None:
+    import math
+
+    if value is not None and not (math.isfinite(value) and lo <= value <= hi):
+        _fail(f"{flag} = {value!r} is invalid: {allowed}")
+
+
+def _check_design_inputs(ratio, bottom_mass, top_mass, restitution) -> None:
+    """The `design` command's bounds: finite values, R in (0, 1), e in [MIN_RESTITUTION, 1), masses in
+    the stack-file mass range, and optimal stacks of at most MAX_MASSES masses. Plain checks first;
+    the rigid model (numpy, scipy) only to count the masses, stopping at MAX_MASSES."""
+    import math
+
+    from .constants import MAX_MASSES
+    from .stackfile import LIMITS, MIN_RESTITUTION
+
+    lo, hi = LIMITS["mass"]
+    _check_number(restitution, "--restitution", MIN_RESTITUTION, 1.0,
+                  f"the restitution of every impact, {MIN_RESTITUTION:g} <= e < 1 (e = 1 has no optimal stack)")
+    if restitution >= 1:
+        _fail(f"--restitution = {restitution!r} is invalid: the optimal MVG stack needs e < 1 (for e = 1 "
+              "the gain grows with n without bound)")
+    if ratio is not None and not (math.isfinite(ratio) and 0 < ratio < 1):
+        _fail(f"--mass-ratio = {ratio!r} is invalid: R = m_n/m_1 must lie in (0, 1)")
+    _check_number(bottom_mass, "--bottom-mass", lo, hi, f"a mass in kg between {lo:g} and {hi:g}")
+    _check_number(top_mass, "--top-mass", lo, hi, f"a mass in kg between {lo:g} and {hi:g}")
+    if ratio is None:
+        if bottom_mass is None or top_mass is None:
+            _fail("--mass-ratio: missing; give --mass-ratio R, or both --bottom-mass and --top-mass")
+        if not top_mass < bottom_mass:
+            _fail(f"--top-mass = {top_mass!r} is invalid: must be lighter than --bottom-mass = {bottom_mass!r}")
+        ratio = top_mass / bottom_mass
+    elif top_mass is not None:
+        _fail("--top-mass: give --mass-ratio or --top-mass, not both")
+    from .errors import ParameterError
+    from .rigid import met_n_for_ratio, mvg_optimal_n
+
+    for name, count in (("MVG", mvg_optimal_n), ("MET", met_n_for_ratio)):
+        try:
+            count(ratio, restitution, n_limit=MAX_MASSES)
+        except ParameterError as exc:
+            if exc.name != "n_limit":
+                raise
+            _fail(f"--mass-ratio = {ratio:.6g} is invalid with --restitution = {restitution:.6g}: the "
+                  f"{name} stack has more than {MAX_MASSES} masses, the most a stack may have "
+                  "(raise the mass ratio)")
 
 
 @app.command()
@@ -49,6 +131,7 @@ def design(
     from . import report
 
     try:
+        _check_design_inputs(ratio, bottom_mass, top_mass, restitution)
         result = report.design_report(ratio=ratio, m1=bottom_mass, mn=top_mass, e=restitution)
     except HertzChainError as exc:
         _fail(str(exc))
@@ -64,26 +147,46 @@ def simulate(
     force: bool = typer.Option(False, "--force", help="Overwrite existing output files."),
 ) -> None:
     """Simulate a stack file with compliant contacts and compare it with the rigid model."""
+    from . import _paths
+    from .stackfile import load_stack_file
+
+    try:  # everything the user gave is checked before anything heavy is imported or run
+        if output is not None and plot is not None and os.path.abspath(output) == os.path.abspath(plot):
+            _fail(f"--plot {plot}: the same file as --output")
+        if output is not None:
+            _paths.check_output_path(output, "--output", OUTPUT_SUFFIXES, force)
+        if plot is not None:
+            _paths.check_output_path(plot, "--plot", PLOT_SUFFIXES, force)
+        spec = load_stack_file(stack_file)
+    except HertzChainError as exc:
+        _fail(str(exc))
     from . import report
 
-    for path in (plot, output):
-        if path is not None and path.exists() and not force:
-            _fail(f"{path} exists; pass --force to overwrite it")
-    if output is not None and output.suffix.lower() not in (".nc", ".csv"):
-        _fail(f"--output {output}: expected a .nc or .csv file")
-    if plot is not None and plot.suffix.lower() != ".png":
-        _fail(f"--plot {plot}: expected a .png file")
     try:
-        result = report.simulate_file(stack_file)
+        result = report.run_spec(spec)
+    except SolverError as exc:
+        typer.echo(f"hertz-chain: {Status.FAILED.text}: {_one_line(exc)}", err=True)
+        raise typer.Exit(code=Status.FAILED.exit_code)
     except HertzChainError as exc:
         _fail(str(exc))
     typer.echo(report.to_json(result) if as_json else report.summary_table(result))
-    if output is not None:
-        report.write_output(result, output)
-    if plot is not None:
-        from . import plot as plotting
+    try:
+        if output is not None:
+            _paths.write_atomically(output, lambda tmp: report.write_output(result, tmp), force, "--output")
+        if plot is not None:
+            from . import plot as plotting
 
-        plotting.plot_report(result, plot)
+            _paths.write_atomically(plot, lambda tmp: plotting.plot_report(result, tmp), force, "--plot")
+    except HertzChainError as exc:
+        _fail(str(exc))
+    for warning in getattr(result, "warnings", None) or ():
+        typer.echo(f"hertz-chain: warning: {_one_line(warning)}", err=True)
+    status = result.status
+    if not status.ok:
+        hint = status.hint(spec.solver.max_steps)
+        typer.echo(f"hertz-chain: {status.text}: {_one_line(hint)}" if hint else f"hertz-chain: {status.text}",
+                   err=True)
+        raise typer.Exit(code=status.exit_code)
 
 
 @app.command()
@@ -97,8 +200,18 @@ def demo() -> None:
         _fail(str(exc))
 
 
-def main() -> None:
-    """Console-script entry point."""
+def _usage_error(exc) -> str:
+    """One line for a usage error of the command-line parser (unknown command or flag, a missing
+    or malformed argument), with the command to ask for help."""
+    message = _one_line(exc.format_message())
+    ctx = getattr(exc, "ctx", None)
+    if ctx is not None:
+        message += f" (see '{ctx.command_path} --help')"
+    return message
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Console-script entry point. Exits with the status of the module docstring's table."""
     # Equinox's run-time checks (diffrax's sign check of `dt0` against the traced `t1`) are host
     # callbacks, and an executable with a host callback is never written to JAX's persistent cache.
     # The library validates every input before tracing and reports non-finite states as a failed
@@ -107,7 +220,23 @@ def main() -> None:
     # `hertz_chain._export` keeps the traced solve on disk too (`jax.export`; 3.4 s -> 2.6 s).
     os.environ.setdefault("EQX_ON_ERROR", "nan")
     try:
-        app()
+        code = app(args=argv, prog_name="hertz-chain", standalone_mode=False)
     except HertzChainError as exc:  # safety net: never a traceback for a user error
-        typer.echo(f"hertz-chain: error: {exc}", err=True)
-        sys.exit(2)
+        typer.echo(f"hertz-chain: error: {_one_line(exc)}", err=True)
+        sys.exit(EXIT_BAD_INPUT)
+    except typer.Exit as exc:
+        sys.exit(exc.exit_code)
+    except (typer.Abort, EOFError):
+        typer.echo("hertz-chain: error: aborted", err=True)
+        sys.exit(1)
+    except KeyboardInterrupt:
+        typer.echo("hertz-chain: interrupted", err=True)
+        sys.exit(130)
+    except _ClickException as exc:
+        if type(exc).__name__ == "NoArgsIsHelpError":  # bare `hertz-chain`: the help, on stdout
+            typer.echo(exc.format_message())
+            sys.exit(EXIT_BAD_INPUT)
+        typer.echo(f"hertz-chain: error: {_usage_error(exc)}", err=True)
+        code = getattr(exc, "exit_code", EXIT_BAD_INPUT)
+        sys.exit(code if isinstance(code, int) and code else EXIT_BAD_INPUT)
+    sys.exit(code if isinstance(code, int) else 0)

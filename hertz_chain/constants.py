@@ -1,9 +1,13 @@
 """Physical constants shared by every module (SI units; no heavy imports, so the CLI stays fast)."""
 
-__all__ = ["STANDARD_GRAVITY", "G0"]
+__all__ = ["STANDARD_GRAVITY", "G0", "MAX_MASSES"]
 
 STANDARD_GRAVITY = 9.80665
 """Standard acceleration of gravity, m/s² (3rd CGPM 1901; ISO 80000-3). The default `drop.gravity`."""
 
 G0 = STANDARD_GRAVITY
 """The unit 'g' of acceleration pulses: `a [g] = a [m/s²] / G0`."""
+
+MAX_MASSES = 50
+"""The most masses a stack may have (`Stack`, stack files, `hertz-chain design`). Defined here, free of
+JAX, so that the stack-file checks and the command line refuse a larger stack before importing it."""

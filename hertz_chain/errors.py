@@ -11,6 +11,7 @@ __all__ = [
     "ParameterError",
     "StackFileError",
     "SolverError",
+    "OutputPathError",
     "check_parameter",
 ]
 
@@ -29,6 +30,16 @@ class ParameterError(HertzChainError, ValueError):
 
 class StackFileError(HertzChainError, ValueError):
     """A stack file (TOML) is malformed, has unknown keys, missing fields or wrong units."""
+
+
+class OutputPathError(HertzChainError, ValueError):
+    """An output file (`--output`, `--plot`) cannot be written where it was asked for: a missing or
+    unwritable folder, a name too long or with an unknown extension, or an existing file (without
+    `--force`). The message names the option (`key`), the path and what is allowed."""
+
+    def __init__(self, key: str, path: object, problem: str):
+        self.key, self.path, self.problem = key, path, problem
+        super().__init__(" ".join(f"{key} {path}: {problem}".splitlines()))
 
 
 class SolverError(HertzChainError, RuntimeError):

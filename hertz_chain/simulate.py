@@ -404,12 +404,13 @@ def _cascade_over(t, ys, args):
       landings again (rebounds), never a push that reaches the masses flying apart above.
 
     or (with mass 1 off the ground, or without a ground) a group of masses `1..k` flying freely has
-    settled (its internal energy `E_int`, kinetic in its centre-of-mass frame plus its inner contacts'
-    elastic energy, is below `_SETTLED` of its drop energy `M_k V^2/2`) and can never push mass `k+1`
-    again: mass `k+1` moves away from the group's centre of mass faster than any velocity `E_int` could
+    settled (without gravity: its internal energy `E_int`, kinetic in its centre-of-mass frame plus its
+    inner contacts' elastic energy, is below `_SETTLED` of its drop energy `M_k V^2/2`; under gravity
+    the group falls back to the ground, a rebound, so its masses never get final velocities) and can
+    never push mass `k+1` again: mass `k+1` moves away from the group's centre of mass faster than any velocity `E_int` could
     give the group's top mass, `sqrt(2 E_int (M_k - m_k)/(M_k m_k))`. Every mass above the group then
     has its final launch; the masses of a settled or bound group report their velocities at the end of
-    the cascade (within `sqrt(_SETTLED) V` of any later value for a settled free group).
+    the cascade (without gravity within `sqrt(_SETTLED) V` of any later value).
 
     `args = (stack, scale, T, v0s)`, `v0s` the scaled initial velocities (contact has happened once a
     velocity departs from free flight)."""
@@ -444,7 +445,9 @@ def _cascade_over(t, ys, args):
     inner = jnp.concatenate([jnp.zeros(1), jnp.cumsum(pot[1:])])  # interfaces 1..k-1
     e_int = jnp.maximum(jnp.cumsum(0.5 * m * v**2) - 0.5 * P**2 / M + inner, 0.0)
     reach = jnp.sqrt(2.0 * e_int * (M - m) / (M * m))
-    settled = e_int <= _SETTLED * 0.5 * M * scale[n] ** 2  # its internal motion is negligible
+    # its internal motion is negligible; or gravity acts, so the group falls back to the ground anyway:
+    # its landing is a rebound, and its masses' velocities never become final
+    settled = (e_int <= _SETTLED * 0.5 * M * scale[n] ** 2) | (stack.gravity > 0)
     escapes = (~closed[1:] & settled[:-1] & (v[1:] - (P / M)[:-1] >= reach[:-1])) & tail[1:n]  # k = 1..n-1
     free = tail[0] | jnp.any(escapes)
     if not stack.ground:
@@ -509,7 +512,7 @@ class _Contacts(eqx.Module):
         over = _cascade_over(t[0], ys, args) & ~was_over
         # the top mass's apex: free, pushed before, its velocity turned from up to down
         apex = ~active[n - 1] & (rows[n - 1, 0] >= 0) & (c.cascade[4] > 0) & (v_top <= 0)
-        rebound = (c.cascade[1] > 0) | jnp.any(frozen & active)
+        rebound = (c.cascade[1] > 0) | jnp.any(frozen & active & ~c.now)  # closes after it was open
         head = jnp.stack([(was_over | over), rebound, jnp.where(over, t[0], c.cascade[2]),
                           top_done | apex | over, v_top]).astype(d.dtype)
         cascade = jnp.concatenate([head, jnp.where(over, ys[n : 2 * n], c.cascade[5:])])

@@ -32,7 +32,7 @@ from jaxtyping import Array, ArrayLike
 
 from . import _config  # noqa: F401  (float64)
 from .contact import AbstractContactLaw
-from .constants import STANDARD_GRAVITY
+from .constants import MAX_MASSES, STANDARD_GRAVITY
 from .errors import ParameterError
 
 __all__ = [
@@ -46,7 +46,6 @@ __all__ = [
     "invert_monotone",
 ]
 
-MAX_MASSES = 50
 
 
 def _is_concrete(*xs) -> bool:

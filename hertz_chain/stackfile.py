@@ -52,7 +52,7 @@ rtol = 1e-10
 | `drop.height` | length ≥ 0, free-fall height of mass 1's lower surface; v = √(2 g h) | one of the two (with a ground) |
 | `drop.gravity` | acceleration ≥ 0 | 9.80665 m/s² with a ground, 0 without |
 | **`[stack]`** | | |
-| `stack.masses` | list of ≥ 2 masses > 0, bottom first | either this or `[stack.design]` |
+| `stack.masses` | list of 2 to 50 (`MAX_MASSES`) masses > 0, bottom first | either this or `[stack.design]` |
 | `stack.gaps` | length ≥ 0, or a list of n−1 (gap between masses j and j+1) | required |
 | `stack.velocities` | list of n velocities (upward-positive), explicit initial state | none |
 | `stack.preload` | bool: start in static equilibrium under gravity (needs gaps = 0, gravity > 0) | `false` |
@@ -61,7 +61,7 @@ rtol = 1e-10
 | `stack.shape` | `"sphere"` / `"flat"`, or a list of n | `"sphere"` when `radius` is given |
 | **`[stack.design]`** | | |
 | `kind` | `"mvg"` (power law, Eq 15) / `"met"` (maximum energy transfer, Eq 25) | required |
-| `n` | integer ≥ 2, or `"optimal"` | `"optimal"` |
+| `n` | integer from 2 to 50 (`MAX_MASSES`), or `"optimal"` (whose n must be ≤ 50) | `"optimal"` |
 | `restitution` | design restitution e ∈ (0, 1] | `contact.restitution` |
 | `bottom_mass`, `top_mass`, `mass_ratio` | masses > 0; R = m_n/m_1 ∈ (0, 1) | see below |
 | **`[ground]`** | (only with a ground) | |
@@ -75,19 +75,20 @@ rtol = 1e-10
 | **`[contact]`**, `[contact.ground]`, `[[contact.interface]]` | | |
 | `law` | `"hertz"`, `"hunt-crossley"`, `"tsuji"`, `"kelvin-voigt"`, `"viscoelastic"` | required in `[contact]` |
 | `stiffness` | N/m^1.5 (Hertzian laws) or N/m (`kelvin-voigt`), > 0 | from materials and geometry |
-| `restitution` | e ∈ (0, 1] (ground too: a contact law is passive) | one of restitution / alpha / damping |
+| `restitution` | e ∈ [0.001, 1] (ground too: a contact law is passive) | one of restitution / alpha / damping |
 | `chi_map` | `hunt-crossley` only: `"hunt-crossley"`, `"herbert-mcwhannell"`, `"lankarani-nikravesh"`, `"gonthier"`, `"flores"`, `"hu-guo"`, `"zhiying-qishao"`, `"exact"` | `"exact"` |
 | `calibration_velocity` | velocity > 0 (`hunt-crossley`, `viscoelastic` with restitution) | builder's choice (see below) |
 | `alpha` | s/m ≥ 0 (`hunt-crossley`) | none |
-| `damping` | ≥ 0: `tsuji` η (plain number), `kelvin-voigt` c (N s/m), `viscoelastic` A (s) | none |
+| `damping` | ≥ 0: `tsuji` η ≤ 1e6 (plain number), `kelvin-voigt` c ≤ 1e9 N s/m, `viscoelastic` A ≤ 1 s | none |
 | `clamp` | bool: force clamped at F ≥ 0 | `true` |
 | `index` | `[[contact.interface]]` only: interface number j ∈ [1, n−1], or a list | required |
 | **`[solver]`** | | |
 | `solver` | `"tsit5"`, `"dopri8"`, `"kvaerno5"` | `"tsit5"` |
 | `rtol`, `atol` | numbers in (0, 1) and > 0 | simulator's default |
-| `t_max` | time > 0 | simulator's default |
-| `max_steps` | integer ≥ 1 | simulator's default |
-| `n_output` / `dt_output` | integer ≥ 2 / time > 0 (one of them) | simulator's default |
+| `t_max` | time > 0, ≤ 1e4 s | simulator's default (from the physics: covers the cascade) |
+| `until` | `"cascade"` or `"t_max"` | `"cascade"`: stop when the first cascade ends; `"t_max"` (needs `t_max`) goes on and reports later impacts as rebounds |
+| `max_steps` | integer from 1 to 10_000_000 (`MAX_STEPS`) | simulator's default |
+| `n_output` / `dt_output` | integer from 2 to 1_000_000 (`MAX_OUTPUT_POINTS`) / time > 0 with t_max/dt_output ≤ 1_000_000, or ≥ 1e-7 s (`MIN_DT_OUTPUT`) when `t_max` is not given (one of them) | simulator's default |
 
 A spec value of `None` means "not given": the builder or simulator applies its own default.
 
@@ -235,6 +236,36 @@ preload = true                # interfaces 1..n-1 start compressed by the weight
                               # (interface 0 too when impact_velocity = 0: resting on the ground)
 ```
 
+## Physical ranges and sizes
+
+Every value is checked here, before anything is built or allocated, so that a typo such as
+`masses = [1e308, ...]` or `max_steps = 1e300` fails on the key the user wrote rather than deep in the
+solver (an overflow, a `MemoryError`, a hang). After conversion to SI every quantity is finite and its
+magnitude lies in this range (`LIMITS`; zero is left to each key's own rule):
+
+| dimension | keys | magnitude |
+|---|---|---|
+| mass | `stack.masses`, `stack.design.bottom_mass`/`top_mass` and every design mass | 1e-12 kg to 1e6 kg |
+| length | `stack.gaps`, `drop.height`, radii | at most 1e10 m |
+| velocity | `drop.impact_velocity`, `stack.velocities`, `calibration_velocity`, and √(2 g h) of a `height` | at most 1e4 m/s |
+| acceleration | `drop.gravity` | at most 1e4 m/s² |
+| time | `solver.t_max`, `solver.dt_output`, viscoelastic `damping` | at most 1e4 s |
+| pressure | `youngs_modulus` | at most 1e13 Pa |
+| density | `density` | at most 1e5 kg/m³ |
+| stiffness | `stiffness` | at most 1e15 N/m^1.5 (or N/m) |
+| damping | `damping` (`DAMPING_LIMITS`): tsuji η; kelvin-voigt c; viscoelastic A | 1e6; 1e9 N s/m; 1 s |
+| damping | `alpha` | at most 1e6 s/m |
+
+With these ranges every product the simulator forms (m v², k δ^2.5, ...) stays finite. Sizes:
+at most `MAX_MASSES` = 50 masses (explicit, `stack.design.n`, or an `"optimal"` design, counted here
+with the rigid model), `solver.max_steps` ≤ `MAX_STEPS` = 10_000_000, `solver.n_output` ≤
+`MAX_OUTPUT_POINTS` = 1_000_000 and `t_max / dt_output` ≤ 1_000_000 (without `t_max`, whose default
+is chosen by the simulator, `dt_output` ≥ `MIN_DT_OUTPUT` = 1e-7 s), every restitution ≥
+`MIN_RESTITUTION` = 0.001 (the contact laws' calibration range). A quantity string has at most
+`MAX_QUANTITY_LENGTH` = 200 characters and its powers plain exponents of magnitude ≤ 100 (pint
+would otherwise evaluate `"10**10**10 kg"` exactly, forever). A stack file has at most
+`MAX_FILE_BYTES` = 10 MB; a UTF-8 byte-order mark at its start is ignored.
+
 ## Errors
 
 Every problem raises [`StackFileError`][hertz_chain.errors.StackFileError] with one line naming the
@@ -249,16 +280,26 @@ import dataclasses
 import difflib
 import math
 import os
+import re
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, Mapping
 
-from .constants import STANDARD_GRAVITY
+from .constants import MAX_MASSES, STANDARD_GRAVITY
 from .errors import StackFileError
 
 __all__ = [
     "STANDARD_GRAVITY",
+    "MAX_MASSES",
+    "MAX_STEPS",
+    "MAX_OUTPUT_POINTS",
+    "MIN_DT_OUTPUT",
+    "MIN_RESTITUTION",
+    "MAX_QUANTITY_LENGTH",
+    "MAX_FILE_BYTES",
+    "LIMITS",
+    "DAMPING_LIMITS",
     "CONTACT_LAWS",
     "CHI_MAPS",
     "SOLVERS",
@@ -278,6 +319,44 @@ __all__ = [
     "parse_quantity",
 ]
 
+
+# ---- bounds (the "Physical ranges and sizes" section of the module docstring)
+MAX_STEPS = 10_000_000
+"""Largest `solver.max_steps`: the solver keeps buffers of `max_steps` rows."""
+MAX_OUTPUT_POINTS = 1_000_000
+"""Largest `solver.n_output`, and largest `solver.t_max / solver.dt_output`."""
+MIN_DT_OUTPUT = 1e-7
+"""Smallest `solver.dt_output` (s) when `solver.t_max` is not given (the run's length is not known here)."""
+MIN_RESTITUTION = 1e-3
+"""Smallest restitution (the calibration of the contact laws supports 0.001 <= e <= 1)."""
+MAX_FILE_BYTES = 10_000_000
+"""Largest stack file (bytes) that `load_stack_file` reads."""
+MAX_QUANTITY_LENGTH = 200
+"""Longest quantity string (characters) handed to pint."""
+_MAX_EXPONENT = 100.0  # largest |exponent| of a power in a quantity string ("m^1.5", "10**3 kg")
+
+LIMITS = {
+    "mass": (1e-12, 1e6),
+    "length": (0.0, 1e10),
+    "time": (0.0, 1e4),
+    "velocity": (0.0, 1e4),
+    "acceleration": (0.0, 1e4),
+    "pressure": (0.0, 1e13),
+    "density": (0.0, 1e5),
+    "hertz_stiffness": (0.0, 1e15),
+    "linear_stiffness": (0.0, 1e15),
+    "viscous_damping": (0.0, 1e9),
+    "inverse_velocity": (0.0, 1e6),
+}
+"""Dimension -> (smallest non-zero magnitude, largest magnitude), SI. A magnitude outside is an error
+naming the key; 0 is left to each key's own sign rule (a mass must still be > 0)."""
+
+DAMPING_LIMITS = {"tsuji": (1e6, ""), "kelvin-voigt": (1e9, " N s/m"), "viscoelastic": (1.0, " s")}
+"""Largest `damping` per law: Tsuji's eta (plain), Kelvin-Voigt's c (N s/m), the viscoelastic A (s)."""
+
+_UNITS = {"mass": "kg", "length": "m", "time": "s", "velocity": "m/s", "acceleration": "m/s^2",
+          "pressure": "Pa", "density": "kg/m^3", "hertz_stiffness": "N/m^1.5", "linear_stiffness": "N/m",
+          "viscous_damping": "N s/m", "inverse_velocity": "s/m"}
 
 CONTACT_LAWS = ("hertz", "hunt-crossley", "tsuji", "kelvin-voigt", "viscoelastic")
 CHI_MAPS = (
@@ -310,7 +389,9 @@ _CONTACT_KEYS = (
     "damping",
     "clamp",
 )
-_SOLVER_KEYS = ("solver", "rtol", "atol", "t_max", "max_steps", "n_output", "dt_output")
+_SOLVER_KEYS = ("solver", "rtol", "atol", "t_max", "until", "max_steps", "n_output", "dt_output")
+#: `solver.until`: stop when the first cascade ends, or go on to `t_max` and report rebounds.
+UNTIL = ("cascade", "t_max")
 
 _HERTZIAN = ("hertz", "hunt-crossley", "tsuji", "viscoelastic")
 
@@ -495,6 +576,7 @@ class SolverSpec:
     max_steps: int | None = None
     n_output: int | None = None
     dt_output: float | None = None
+    until: str = "cascade"
 
 
 @dataclass(frozen=True)
@@ -618,6 +700,7 @@ def parse_quantity(raw: Any, dim: str, key: str = "value", *, allow_inf: bool = 
         if isinstance(raw, str):
             if not raw.strip():
                 raise _error(key, f"empty string; expected {desc}")
+            _screen(raw, key, desc)
             try:
                 q = _ureg().Quantity(raw)
             except Exception as exc:  # pint raises many types (UndefinedUnitError, TokenError, ...)
@@ -636,6 +719,8 @@ def parse_quantity(raw: Any, dim: str, key: str = "value", *, allow_inf: bool = 
             value = q.to_base_units().magnitude if dim != "dimensionless" else q.to("dimensionless").magnitude
         try:
             value = float(value)
+        except OverflowError:
+            raise _error(key, f"{_show(raw)} is not a finite number") from None
         except (TypeError, ValueError):
             raise _error(key, f"cannot convert {_show(raw)} to a number; expected {desc}") from None
     else:
@@ -646,7 +731,40 @@ def parse_quantity(raw: Any, dim: str, key: str = "value", *, allow_inf: bool = 
         raise _error(key, f"expected {desc}, got {kind}")
     if math.isnan(value) or (math.isinf(value) and not allow_inf):
         raise _error(key, f"{_show(raw)} is not a finite number")
+    if dim in LIMITS and math.isfinite(value):
+        lo, hi = LIMITS[dim]
+        if abs(value) > hi or (value != 0 and abs(value) < lo):
+            shown = _show(raw) if not isinstance(raw, (int, float)) else f"{value:g} {_UNITS[dim]}"
+            where = f"between {lo:g} and {hi:g}" if lo else f"at most {hi:g}"
+            raise _error(key, f"{shown} is out of range: the magnitude must be {where} {_UNITS[dim]}")
     return value
+
+
+_POWER = re.compile(r"\*\*|\^")
+_EXPONENT = re.compile(r"\s*\(?\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(?:/\s*(\d+)\s*)?\)?")
+
+
+def _screen(raw: str, key: str, desc: str) -> None:
+    """Refuse quantity strings that pint would take ages (or all memory) to evaluate: over
+    `MAX_QUANTITY_LENGTH` characters, or a power whose exponent is not a plain number of magnitude at
+    most 100 (`"10**10**10 kg"` asks Python for a number with ten billion digits)."""
+    if len(raw) > MAX_QUANTITY_LENGTH:
+        raise _error(key, f"a quantity string of {len(raw)} characters is too long (at most "
+                          f"{MAX_QUANTITY_LENGTH}); expected {desc}")
+    for match in _POWER.finditer(raw):
+        m = _EXPONENT.match(raw, match.end())
+        ok = m is not None
+        if ok:
+            try:
+                exponent = float(m.group(1)) / (float(m.group(2)) if m.group(2) else 1.0)
+            except (ValueError, ZeroDivisionError):
+                ok = False
+            else:
+                rest = raw[m.end():].lstrip()
+                ok = abs(exponent) <= _MAX_EXPONENT and not rest.startswith(("**", "^"))
+        if not ok:
+            raise _error(key, f"cannot parse {raw!r} as a quantity (a power needs a plain exponent of "
+                              f"magnitude at most {_MAX_EXPONENT:g}); expected {desc}")
 
 
 def _check(ok: bool, key: str, raw: Any, requirement: str) -> None:
@@ -680,13 +798,16 @@ def _bool(raw: Any, key: str) -> bool:
     return raw
 
 
-def _int(raw: Any, key: str, minimum: int) -> int:
+def _int(raw: Any, key: str, minimum: int, maximum: int | None = None, why: str = "") -> int:
+    given = raw
     if isinstance(raw, bool) or not isinstance(raw, int):
         if isinstance(raw, float) and raw.is_integer():
             raw = int(raw)
         else:
             raise _error(key, f"{_show(raw)} is not an integer")
-    _check(raw >= minimum, key, raw, f"must be an integer >= {minimum}")
+    _check(raw >= minimum, key, given, f"must be an integer >= {minimum}")
+    if maximum is not None:
+        _check(raw <= maximum, key, given, f"must be an integer between {minimum} and {maximum:_}{why}")
     return raw
 
 
@@ -804,6 +925,8 @@ def _resolve_contact(merged: dict, label: str, *, ground: bool) -> ContactSpec:
         _check(0 < restitution <= 1, key, raw,
                "must be in (0, 1] (a contact law is passive; e > 1, an 'active ground', is rigid-model only)"
                if ground else "must be in (0, 1]")
+        _check(restitution >= MIN_RESTITUTION, key, raw,
+               f"must be >= {MIN_RESTITUTION:g} (the contact laws are calibrated for {MIN_RESTITUTION:g} <= e <= 1)")
     alpha = None
     if "alpha" in merged:
         raw, key = merged["alpha"]
@@ -813,6 +936,8 @@ def _resolve_contact(merged: dict, label: str, *, ground: bool) -> ContactSpec:
         raw, key = merged["damping"]
         dim = {"tsuji": "dimensionless", "kelvin-voigt": "viscous_damping", "viscoelastic": "time"}[law]
         damping = _non_negative(raw, key, dim)
+        hi, unit = DAMPING_LIMITS[law]
+        _check(damping <= hi, key, raw, f"out of range; law {law!r} takes a damping of at most {hi:g}{unit}")
     chi_map = None
     if "chi_map" in merged:
         raw, key = merged["chi_map"]
@@ -889,7 +1014,7 @@ def _parse_contact(raw: Any, *, has_ground: bool) -> tuple[ContactsSpec, list]:
                 ikey = f"{path}.index" if not isinstance(idx_raw, list) else f"{path}.index[{i}]"
                 if isinstance(item, int) and not isinstance(item, bool) and item == 0:
                     raise _error(ikey, "interface 0 is the ground contact; set it in [contact.ground]")
-                j = _int(item, ikey, 1)
+                j = _int(item, ikey, 1, MAX_MASSES - 1, f" (a stack has at most {MAX_MASSES} masses)")
                 if j in seen:
                     raise _error(ikey, f"interface {j} is already set by {seen[j]}")
                 seen[j] = path
@@ -910,7 +1035,7 @@ def _parse_design(raw: Any, default_restitution: float | None) -> DesignSpec:
     elif isinstance(n_raw, str):
         raise _error("stack.design.n", f"{n_raw!r} is invalid: an integer >= 2 or 'optimal'")
     else:
-        n = _int(n_raw, "stack.design.n", 2)
+        n = _int(n_raw, "stack.design.n", 2, MAX_MASSES, " (the most masses a stack may have)")
     if "restitution" in t:
         e = parse_quantity(t["restitution"], "dimensionless", "stack.design.restitution")
         _check(0 < e <= 1, "stack.design.restitution", t["restitution"], "must be in (0, 1]")
@@ -935,7 +1060,7 @@ def _parse_design(raw: Any, default_restitution: float | None) -> DesignSpec:
                 f"an MET design with n = {n} needs exactly one of bottom_mass, top_mass (got "
                 f"{', '.join(given) or 'none'}); its mass ratios follow from e (Eq 25)",
             )
-        return DesignSpec(kind, n, e, m1, mn, None)
+        return _check_design(DesignSpec(kind, n, e, m1, mn, None))
     if len(given) != 2:
         raise _error(
             "stack.design",
@@ -948,7 +1073,59 @@ def _parse_design(raw: Any, default_restitution: float | None) -> DesignSpec:
         m1 = mn / R
     else:
         mn = m1 * R
-    return DesignSpec(kind, n, e, m1, mn, R)
+    return _check_design(DesignSpec(kind, n, e, m1, mn, R))
+
+
+def _check_design(d: DesignSpec) -> DesignSpec:
+    """The design's masses exist and lie in the mass range; an 'optimal' n is at most MAX_MASSES.
+
+    Uses the rigid model's closed forms (numpy, scipy; no JAX). A problem names the key that decides it."""
+    import numpy as np
+
+    from .errors import ParameterError
+    from . import rigid
+
+    lo, hi = LIMITS["mass"]
+    try:
+        with np.errstate(all="ignore"):
+            if d.n is None and d.kind == "mvg":
+                try:
+                    n = int(rigid.mvg_optimal_n(d.mass_ratio, d.restitution, n_limit=MAX_MASSES))
+                except ParameterError as exc:
+                    if exc.name != "n_limit":
+                        raise
+                    raise _error("stack.design.n", f"'optimal' is invalid here: the optimal MVG stack for "
+                                 f"R = {d.mass_ratio:.6g}, e = {d.restitution:.6g} has more than "
+                                 f"{MAX_MASSES} masses (the most a stack may have); give an integer n") from None
+                masses = rigid.mvg_masses(d.mass_ratio, n, d.bottom_mass)
+            elif d.kind == "met":
+                if d.n is None:
+                    try:
+                        n = int(rigid.met_n_for_ratio(d.mass_ratio, d.restitution, n_limit=MAX_MASSES))
+                    except ParameterError as exc:
+                        if exc.name != "n_limit":
+                            raise
+                        raise _error("stack.design.n", f"'optimal' is invalid here: the MET chain for "
+                                     f"R = {d.mass_ratio:.6g}, e = {d.restitution:.6g} has more than "
+                                     f"{MAX_MASSES} masses (the most a stack may have); give an integer n") from None
+                    m1 = d.bottom_mass if d.bottom_mass is not None else d.top_mass / d.mass_ratio
+                else:
+                    n = d.n
+                    m1 = d.bottom_mass if d.bottom_mass is not None else d.top_mass / float(
+                        rigid.met_mass_ratio(d.restitution, n))
+                masses = rigid.met_masses(d.restitution, n, m1)
+            else:
+                masses = rigid.mvg_masses(d.mass_ratio, d.n, d.bottom_mass)
+            masses = np.asarray(masses, dtype=float)
+    except ParameterError as exc:
+        key = {"e": "stack.design.restitution", "R": "stack.design.mass_ratio"}.get(exc.name, "stack.design")
+        raise _error(key, f"{exc}") from None
+    bad = ~np.isfinite(masses) | (masses < lo) | (masses > hi)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise _error("stack.design", f"mass {i + 1} of this {d.kind.upper()} design is {masses[i]:.4g} kg; every "
+                     f"mass must be between {lo:g} and {hi:g} kg (change bottom_mass, top_mass, mass_ratio or n)")
+    return d
 
 
 def _parse_stack(raw: Any, default_restitution: float | None) -> BodiesSpec:
@@ -971,6 +1148,8 @@ def _parse_stack(raw: Any, default_restitution: float | None) -> BodiesSpec:
                 f"has {len(m)} entr{'y' if len(m) == 1 else 'ies'}; a stack needs at least 2 "
                 "masses",
             )
+        if len(m) > MAX_MASSES:
+            raise _error("stack.masses", f"has {len(m)} entries; a stack has at most {MAX_MASSES} masses")
         masses = tuple(_positive(x, f"stack.masses[{i}]", "mass") for i, x in enumerate(m))
     elif "design" in t:
         design = _parse_design(t["design"], default_restitution)
@@ -1083,14 +1262,25 @@ def _parse_solver(raw: Any) -> SolverSpec:
     if "t_max" in t:
         t_max = _positive(t["t_max"], "solver.t_max", "time")
     if "max_steps" in t:
-        max_steps = _int(t["max_steps"], "solver.max_steps", 1)
+        max_steps = _int(t["max_steps"], "solver.max_steps", 1, MAX_STEPS)
     if "n_output" in t and "dt_output" in t:
         raise _error("solver.dt_output", "conflicts with solver.n_output; give one of them")
     if "n_output" in t:
-        n_output = _int(t["n_output"], "solver.n_output", 2)
+        n_output = _int(t["n_output"], "solver.n_output", 2, MAX_OUTPUT_POINTS, " output points")
     if "dt_output" in t:
         dt_output = _positive(t["dt_output"], "solver.dt_output", "time")
-    return SolverSpec(solver, rtol, atol, t_max, max_steps, n_output, dt_output)
+        if t_max is not None:
+            _check(t_max / dt_output <= MAX_OUTPUT_POINTS, "solver.dt_output", t["dt_output"],
+                   f"t_max / dt_output = {t_max / dt_output:.4g} output points; at most "
+                   f"{MAX_OUTPUT_POINTS:_} (raise dt_output or lower t_max)")
+        else:
+            _check(dt_output >= MIN_DT_OUTPUT, "solver.dt_output", t["dt_output"],
+                   f"must be >= {MIN_DT_OUTPUT:g} s when solver.t_max is not given (with t_max, "
+                   f"t_max / dt_output <= {MAX_OUTPUT_POINTS:_})")
+    until = _choice(t["until"], "solver.until", UNTIL) if "until" in t else "cascade"
+    if until == "t_max" and t_max is None:
+        raise _error("solver.until", "'t_max' needs solver.t_max (the time to run to)")
+    return SolverSpec(solver, rtol, atol, t_max, max_steps, n_output, dt_output, until)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -1143,6 +1333,9 @@ def _build(data: Mapping) -> StackSpec:
                     "instead",
                 )
             impact_velocity = math.sqrt(2.0 * gravity * height)
+            v_max = LIMITS["velocity"][1]
+            _check(impact_velocity <= v_max, "drop.height", drop["height"],
+                   f"a fall from it reaches {impact_velocity:.4g} m/s; at most {v_max:g} m/s (sqrt(2 g h))")
         if "ground" in top:
             ground = _parse_ground(top["ground"])
         else:
@@ -1242,11 +1435,14 @@ def parse_stack(data: Mapping | str, *, source: str | None = None) -> StackSpec:
     if isinstance(data, str):
         import tomllib
 
+        data = data.removeprefix("\ufeff")  # a UTF-8 byte-order mark (Windows editors write one)
         try:
             data = tomllib.loads(data)
         except tomllib.TOMLDecodeError as exc:
             err = _error(None, f"{prefix}invalid TOML: {exc}")
             raise err from None
+        except RecursionError:
+            raise _error(None, f"{prefix}invalid TOML: arrays or tables nested too deeply") from None
     elif not isinstance(data, Mapping):
         raise _error(None, f"{prefix}expected TOML text or a dict, got {type(data).__name__}")
     try:
@@ -1266,11 +1462,20 @@ def load_stack_file(path: str | Path) -> StackSpec:
     """Read and validate a stack file (TOML with units); see the module docstring for the format."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        if path.is_dir():
+            raise _error(None, f"{path}: is a folder, not a stack file")
+        size = path.stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise _error(None, f"{path}: {size} bytes is too large for a stack file (at most {MAX_FILE_BYTES:_})")
+        text = path.read_text(encoding="utf-8-sig")  # a leading byte-order mark is dropped
+    except StackFileError:
+        raise
     except FileNotFoundError:
         raise _error(None, f"{path}: no such stack file") from None
     except UnicodeDecodeError:
         raise _error(None, f"{path}: not a UTF-8 text file") from None
     except OSError as exc:
         raise _error(None, f"{path}: cannot read it ({exc.strerror or exc})") from None
+    except ValueError as exc:  # e.g. a NUL byte in the path
+        raise _error(None, f"{_show(str(path))}: not a usable path ({exc})") from None
     return parse_stack(text, source=str(path))

@@ -60,8 +60,9 @@ class Status(enum.IntEnum):
         if self is Status.INCOMPLETE_T_MAX:
             return "the cascade had not ended at t_max: raise solver.t_max (or leave it unset for the default)"
         if self is Status.INCOMPLETE_MAX_STEPS:
-            return (f"the step budget ran out before the cascade ended: raise solver.max_steps "
-                    f"(now {max_steps}) or loosen solver.rtol/atol")
+            now = "" if max_steps is None else f" (now {max_steps})"
+            return (f"the step budget ran out before the cascade ended: raise solver.max_steps{now} "
+                    "or loosen solver.rtol/atol")
         if self is Status.NO_CONTACT:
             return ("nothing touched before t_max: check the initial velocities and gaps (with gravity 0 "
                     "something must move towards the ground or a neighbour)")
