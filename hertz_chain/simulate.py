@@ -59,9 +59,10 @@ over a whole contact.
 **Stopping: the end of the first cascade.** The solve ends (a boolean `diffrax.Event`) at the first
 accepted step where the cascade is over (`_cascade_over`): something has touched (a velocity departs from
 free flight), every contact between masses is open and no neighbours approach, and mass 1 moves up from
-the ground or is bound to it (`m_1 v_1^2/2 + P_0(delta_0) - m_1 g delta_0 < 0`: it cannot leave the ground
-unless pushed). Under a common gravity the relative velocity of two free masses is constant, so after
-that only mass 1's return to the ground can start anything new: a rebound. With `until="t_max"` the
+the ground or rests on it; more generally, the lower masses `1..k` are bound to the ground (their energy
+is below that of resting unloaded on it) or, as a settled group in flight, can never reach mass `k+1`
+again, while everything above them flies apart. Under a common gravity the relative velocity of two
+free masses is constant, so after that only a return to the ground can start anything new: a rebound. With `until="t_max"` the
 solve goes on to `t_max`, the contact bookkeeping frozen at the cascade's end, and later contacts make the
 status "complete with rebounds". The top mass's launch is frozen earlier if it passes the apex of its
 flight before the cascade is over: its landing back on the stack is a rebound too. `t_max` defaults to a
@@ -407,8 +408,8 @@ def _cascade_over(t, ys, args):
     settled (without gravity: its internal energy `E_int`, kinetic in its centre-of-mass frame plus its
     inner contacts' elastic energy, is below `_SETTLED` of its drop energy `M_k V^2/2`; under gravity
     the group falls back to the ground, a rebound, so its masses never get final velocities) and can
-    never push mass `k+1` again: mass `k+1` moves away from the group's centre of mass faster than any velocity `E_int` could
-    give the group's top mass, `sqrt(2 E_int (M_k - m_k)/(M_k m_k))`. Every mass above the group then
+    never push mass `k+1` again: mass `k+1` moves away from the group's centre of mass faster than any
+    velocity `E_int` could give the group's top mass, `sqrt(2 E_int (M_k - m_k)/(M_k m_k))`. Every mass above the group then
     has its final launch; the masses of a settled or bound group report their velocities at the end of
     the cascade (without gravity within `sqrt(_SETTLED) V` of any later value).
 
