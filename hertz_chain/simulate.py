@@ -365,17 +365,25 @@ def _default_t_max(stack: Stack, state: State, sc: Scales) -> Array:
 
 # ==================================================================== the compiled solve
 def _scaled_field(t, ys, args):
+    """The scaled vector field of the solver's state `[x, v, D (3n) | z (n, with resolve_onsets) | over]`.
+
+    `over` (the last entry) is no variable of the motion: its derivative is zero, and `_Tracked` writes
+    the cascade-over flag of `_cascade_over` into it after every step, so that the stopping event reads
+    one number instead of evaluating the rule again. A state of exactly `3n` entries (the replayed
+    adjoint's physical part) gets the `3n` physical derivatives."""
     stack, scale, T = args[:3]
     n3 = scale.shape[0]
     y = ys[:n3] * scale
     dy = T * stack.vector_field(t * T, y) / scale
     if ys.shape[0] == n3:
         return dy
-    # onset proxy: z_j' = sqrt(delta_j+ / L), whose local error is O(h^1.5) at a contact onset, so the
-    # step controller resolves every onset (the kink of F ~ delta^{3/2}) to the tolerance
-    d = stack.overlaps(stack.split(y)[0]) / scale[0]
-    z = jnp.sqrt(jnp.where(d > 0, d, 0.0) + 1e-300) * stack.interface_mask()
-    return jnp.concatenate([dy, z])
+    parts = [dy]
+    if ys.shape[0] > n3 + 1:
+        # onset proxy: z_j' = sqrt(delta_j+ / L), whose local error is O(h^1.5) at a contact onset, so the
+        # step controller resolves every onset (the kink of F ~ delta^{3/2}) to the tolerance
+        d = stack.overlaps(stack.split(y)[0]) / scale[0]
+        parts.append(jnp.sqrt(jnp.where(d > 0, d, 0.0) + 1e-300) * stack.interface_mask())
+    return jnp.concatenate(parts + [jnp.zeros(1, dy.dtype)])
 
 
 #: A scaled velocity that differs from free flight by more than this has felt a contact.
@@ -390,7 +398,7 @@ _SETTLED = 1e-6
 _QUIET = 1e-12
 
 
-def _cascade_over(t, ys, args):
+def _cascade_over(t, ys, args, x, v, d, dd, closed):
     """The first cascade is over (issue 16's rule; README, "The launch, the cascade and the statuses"):
     something has touched, and for some `k` (0..n) the masses `1..k` rest on the ground while everything
     above flies apart: every contact above mass `k` is open and no neighbours there approach (their
@@ -414,21 +422,18 @@ def _cascade_over(t, ys, args):
     the cascade (without gravity within `sqrt(_SETTLED) V` of any later value).
 
     `args = (stack, scale, T, v0s)`, `v0s` the scaled initial velocities (contact has happened once a
-    velocity departs from free flight)."""
+    velocity departs from free flight); `x`, `v` (SI), the overlaps `d`, their rates `dd` and the closed
+    contacts `closed` of the state `ys`, which the caller (`_Contacts.update`) has at hand."""
     stack, scale, T, v0s = args
     n = stack.n
-    y = ys[: scale.shape[0]] * scale
-    x, v, _ = stack.split(y)
-    d, dd = stack.overlaps(x), stack.overlap_rates(v)
     mask = stack.interface_mask()
-    closed = stack.in_contact(d, dd) & mask
     free_fall = v0s - stack.gravity * T * t / scale[n]
     touched = jnp.any(jnp.abs(ys[n : 2 * n] - free_fall) > _TOUCHED)
     # per interface: open and not approaching, or quiet (its relative kinetic and elastic energy below
     # `_QUIET` of its drop energy: a clump of masses moving as one body), or absent
-    mu = stack.effective_masses()
+    mu, m, pot = stack.effective_masses(), stack.masses, stack.potentials(d)
     touching = d > -jnp.sqrt(_QUIET) * scale[0]  # in contact, or within 1e-6 of the length scale
-    quiet = touching & (0.5 * mu * dd**2 + stack.potentials(d) <= _QUIET * 0.5 * mu * scale[n] ** 2)
+    quiet = touching & (0.5 * mu * dd**2 + pot <= _QUIET * 0.5 * mu * scale[n] ** 2)
     # Between two free masses (and mass 1 and the ground) an approach slower than sqrt(_QUIET) V is
     # round-off dust; the contact just above a group bound to the ground must not approach at all
     # (its lower mass is held, so a mass falling onto it speeds up: that landing is still to come).
@@ -441,7 +446,6 @@ def _cascade_over(t, ys, args):
     # mass frame plus its inner contacts' elastic energy) bounds how fast its top mass k can ever move
     # relative to the group's centre of mass (gravity is common: the centre of mass frame is free fall);
     # when mass k+1 already moves away faster than that, the group can never push it again.
-    m, pot = stack.masses, stack.potentials(d)
     M, P = jnp.cumsum(m), jnp.cumsum(m * v)
     inner = jnp.concatenate([jnp.zeros(1), jnp.cumsum(pot[1:])])  # interfaces 1..k-1
     e_int = jnp.maximum(jnp.cumsum(0.5 * m * v**2) - 0.5 * P**2 / M + inner, 0.0)
@@ -462,8 +466,9 @@ def _cascade_over(t, ys, args):
 
 
 def _cascade_complete(t, ys, args, **kwargs):
-    """diffrax event: `_cascade_over` (ends the solve at the first accepted step where it holds)."""
-    return _cascade_over(t, ys, args)
+    """diffrax event: the cascade-over flag that `_Tracked` wrote into the state's last entry (ends the
+    solve at the first accepted step where `_cascade_over` holds)."""
+    return ys[-1] > 0.5
 
 
 class _Contacts(eqx.Module):
@@ -510,7 +515,7 @@ class _Contacts(eqx.Module):
         rows = jnp.where(jnp.stack([active] + [left] * 5, axis=-1) & ~frozen[:, None],
                          jnp.stack([t, t, d, dd, v_lo, v], axis=-1), c.rows)
         now = jnp.where(frozen, c.now, active)
-        over = _cascade_over(t[0], ys, args) & ~was_over
+        over = _cascade_over(t[0], ys, args, x, v, d, dd, active) & ~was_over
         # the top mass's apex: free, pushed before, its velocity turned from up to down
         apex = ~active[n - 1] & (rows[n - 1, 0] >= 0) & (c.cascade[4] > 0) & (v_top <= 0)
         rebound = (c.cascade[1] > 0) | jnp.any(frozen & active & ~c.now)  # closes after it was open
@@ -576,7 +581,11 @@ class _Tracked(dfx.AbstractWrappedSolver):
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
         inner, contacts = solver_state
         y1, y_error, dense_info, inner, result = self.solver.step(terms, t0, t1, y0, args, inner, made_jump)
-        return y1, y_error, dense_info, (inner, _Contacts.update(contacts, t1, y1, args, self.audit)), result
+        contacts = _Contacts.update(contacts, t1, y1, args, self.audit)
+        # the cascade-over flag, read by the stopping event (`_scaled_field`); its derivative is zero, so
+        # its error estimate is zero already
+        y1 = y1.at[-1].set(contacts.cascade[0])
+        return y1, y_error, dense_info, (inner, contacts), result
 
     def func(self, terms, t0, y0, args):
         return self.solver.func(terms, t0, y0, args)
@@ -652,7 +661,8 @@ def _setup(stack: Stack, state: State, t_max, cfg: _Config):
     scale = sc.vector(n)
     y0 = state.flat()
     t1 = jnp.where(jnp.isnan(t_max), _default_t_max(stack, state, sc), t_max)
-    y0s = jnp.concatenate([y0 / scale, jnp.zeros(n)]) if cfg.tolerances.resolve_onsets else y0 / scale
+    proxies = jnp.zeros(n if cfg.tolerances.resolve_onsets else 0)
+    y0s = jnp.concatenate([y0 / scale, proxies, jnp.zeros(1)])  # `_scaled_field`: [x v D | z | over]
     return sc, scale, y0s, t1 / sc.time
 
 
