@@ -87,7 +87,7 @@ rtol = 1e-10
 | `rtol`, `atol` | numbers in (0, 1) and > 0 | simulator's default |
 | `t_max` | time > 0, ≤ 1e4 s | simulator's default (from the physics: covers the cascade) |
 | `until` | `"cascade"` or `"t_max"` | `"cascade"`: stop when the first cascade ends; `"t_max"` (needs `t_max`) goes on and reports later impacts as rebounds |
-| `max_steps` | integer from 1 to 10_000_000 (`MAX_STEPS`) | simulator's default |
+| `max_steps` | integer from 1 to 10_000_000 (`MAX_STEPS`), history ≤ 4 GiB (`MAX_RUN_MEMORY`) | simulator's default |
 | `n_output` / `dt_output` | integer from 2 to 1_000_000 (`MAX_OUTPUT_POINTS`) / time > 0 with t_max/dt_output ≤ 1_000_000, or ≥ 1e-7 s (`MIN_DT_OUTPUT`) when `t_max` is not given (one of them) | simulator's default |
 
 A spec value of `None` means "not given": the builder or simulator applies its own default.
@@ -258,7 +258,8 @@ magnitude lies in this range (`LIMITS`; zero is left to each key's own rule):
 
 With these ranges every product the simulator forms (m v², k δ^2.5, ...) stays finite. Sizes:
 at most `MAX_MASSES` = 50 masses (explicit, `stack.design.n`, or an `"optimal"` design, counted here
-with the rigid model), `solver.max_steps` ≤ `MAX_STEPS` = 10_000_000, `solver.n_output` ≤
+with the rigid model), `solver.max_steps` ≤ `MAX_STEPS` = 10_000_000 and its step history
+(`run_memory`: `8 (max_steps + 1)(11 n + 2)` bytes) ≤ `MAX_RUN_MEMORY` = 4 GiB, `solver.n_output` ≤
 `MAX_OUTPUT_POINTS` = 1_000_000 and `t_max / dt_output` ≤ 1_000_000 (without `t_max`, whose default
 is chosen by the simulator, `dt_output` ≥ `MIN_DT_OUTPUT` = 1e-7 s), every restitution ≥
 `MIN_RESTITUTION` = 0.001 (the contact laws' calibration range). A quantity string has at most
@@ -323,6 +324,18 @@ __all__ = [
 # ---- bounds (the "Physical ranges and sizes" section of the module docstring)
 MAX_STEPS = 10_000_000
 """Largest `solver.max_steps`: the solver keeps buffers of `max_steps` rows."""
+MAX_RUN_MEMORY = 4 * 2**30
+"""Largest step history a stack file may ask for (bytes, `run_memory`): 4 GiB."""
+
+
+def run_memory(n: int, max_steps: int) -> int:
+    """Bytes of the step history `simulate` keeps for `n` masses and `max_steps` steps: the scaled state
+    (`3n` physical, `n` onset proxies, one flag) and the time of every step, float64, plus the
+    derived quantities of the used rows (positions, velocities, accelerations, overlaps, rates,
+    forces, dissipation: `7n`)."""
+    return 8 * (max_steps + 1) * ((4 * n + 2) + 7 * n)
+
+
 MAX_OUTPUT_POINTS = 1_000_000
 """Largest `solver.n_output`, and largest `solver.t_max / solver.dt_output`."""
 MIN_DT_OUTPUT = 1e-7
@@ -1387,6 +1400,11 @@ def _build(data: Mapping) -> StackSpec:
     _check_curved(contacts, bodies, ground, overrides, n)
 
     solver = _parse_solver(top["solver"]) if "solver" in top else SolverSpec()
+    if solver.max_steps is not None and n is not None:
+        need = run_memory(n, solver.max_steps)
+        _check(need <= MAX_RUN_MEMORY, "solver.max_steps", solver.max_steps,
+               f"a run of {n} masses would keep {need / 2**30:.1f} GiB of step history; at most "
+               f"{MAX_RUN_MEMORY / 2**30:g} GiB (lower max_steps)")
     drop_spec = DropSpec(gravity, impact_velocity, height)
     return StackSpec(drop_spec, bodies, contacts, ground, solver, materials, title)
 

@@ -203,6 +203,9 @@ FILE_ROWS = [
      "contact.interface[0].stiffness"),
     # solver sizes
     ("max_steps_1e8", {"solver.max_steps": 10**8}, "solver.max_steps"),
+    # 50 masses x 2e6 steps: 8 (2e6 + 1)(11 x 50 + 2) bytes = 8.2 GiB of step history > MAX_RUN_MEMORY
+    ("max_steps_memory", {"stack.masses": [1.0] * 50, "stack.gaps": 0, "solver.max_steps": 2_000_000},
+     "solver.max_steps"),
     ("max_steps_above", {"solver.max_steps": MAX_STEPS + 1}, "solver.max_steps"),
     ("max_steps_1e300", {"solver.max_steps": 1e300}, "solver.max_steps"),
     ("max_steps_int64", {"solver.max_steps": 2**63 - 1}, "solver.max_steps"),
