@@ -255,8 +255,12 @@ def _clean_env(**extra):
     return env
 
 
-def _on_disk(folder: str) -> tuple[bool, bool]:
-    """(the compiled solve is in the compilation cache, the traced solve is in `_export`'s folder)."""
+def _on_disk(root: str) -> tuple[bool, bool]:
+    """(the compiled solve is in the compilation cache, the traced solve is in `_export`'s folder), for the
+    cache root `root` (`HERTZ_CHAIN_CACHE_DIR`; JAX's cache is its `jax/` subfolder, `hertz_chain._cache`)."""
+    folder = os.path.join(root, "jax")
+    if not os.path.isdir(folder):
+        return False, False
     compiled = any(f.startswith(("jit__solve", "jit_simulate__solve")) for f in os.listdir(folder))
     export = os.path.join(folder, "export")
     traced = os.path.isdir(export) and any(f.endswith(".jaxexport") for f in os.listdir(export))
@@ -285,7 +289,7 @@ def compile_and_cli(quick: bool) -> dict:
                 if p.returncode != 0:
                     raise RuntimeError(p.stderr[-2000:])
                 rec[phase] = json.loads(p.stdout.strip().splitlines()[-1])
-            rec["cache_files"] = len(os.listdir(tmp))
+            rec["cache_files"] = len(os.listdir(os.path.join(tmp, "jax")))
             rec["solve_cached"], rec["solve_exported"] = _on_disk(tmp)
             out["probe"][label] = rec
             log(f"  compile probe [{label}]: {rec}")

@@ -9,6 +9,8 @@ import os
 
 import jax
 
+from ._cache import cache_dir
+
 jax.config.update("jax_enable_x64", True)
 
 
@@ -38,25 +40,21 @@ def expose_cpu_cores() -> int | None:
     jax.config.update("jax_num_cpu_devices", n)
     return n
 
-_DEFAULT_CACHE = os.path.join(
-    os.environ.get("XDG_CACHE_HOME", os.path.join(os.path.expanduser("~"), ".cache")),
-    "hertz_chain",
-    "jax",
-)
-
-
 CACHE_DIR: str | None = None
 """The compilation cache folder in use (None: off); `_export` keeps its traced functions below it."""
 
 
 def enable_compilation_cache(path: str | None = None) -> str | None:
-    """Turn on JAX's persistent compilation cache (default: ``~/.cache/hertz_chain/jax``).
+    """Turn on JAX's persistent compilation cache in `path`, default ``cache_dir("jax")``
+    (``~/.cache/hertz_chain/jax``, or ``$HERTZ_CHAIN_CACHE_DIR/jax``; `hertz_chain._cache`).
 
     Set ``HERTZ_CHAIN_NO_CACHE=1`` to disable it. Returns the folder used, or None.
     """
     if os.environ.get("HERTZ_CHAIN_NO_CACHE"):
         return None
-    path = path or os.environ.get("HERTZ_CHAIN_CACHE_DIR", _DEFAULT_CACHE)
+    path = path or cache_dir("jax")
+    if path is None:
+        return None
     try:
         os.makedirs(path, exist_ok=True)
     except OSError:

@@ -20,15 +20,16 @@ comparison) and the solver options. It resolves, in this order:
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 
 import numpy as np
 
-from . import calibration
 from .contact import AbstractContactLaw, make_law
 from .errors import ParameterError, StackFileError
 from .materials import Material, contact_stiffness, material as lookup_material
+from .registry import LAWS
 from .rigid import cascade_velocities, met_design, met_mass_ratio, mvg_design
 from .simulate import Tolerances
 from .stack import Stack, State, at_impact, resting
@@ -89,10 +90,7 @@ def _material(spec: StackSpec, name: str | None) -> Material | None:
 def _stiffness(spec: StackSpec, cs: ContactSpec, j: int, n: int) -> float:
     if cs.stiffness is not None:
         return cs.stiffness
-    where = f"{cs.source}.stiffness"
-    if cs.law == "kelvin-voigt":
-        raise StackFileError(f"{where}: kelvin-voigt needs an explicit stiffness (N/m); "
-                             "materials give the Hertz stiffness only")
+    where = f"{cs.source}.stiffness"  # a law that is not Hertzian always has one (`stackfile` checks)
     mats, radii = spec.stack.material_list(n), spec.stack.radius_list(n)
     if mats is None or radii is None:
         raise StackFileError(f"{where}: missing; give a stiffness or stack.material and stack.radius")
@@ -110,18 +108,35 @@ def _stiffness(spec: StackSpec, cs: ContactSpec, j: int, n: int) -> float:
     return contact_stiffness(pair[0], pair[1], R1, None if math.isinf(R2) else R2)
 
 
-def _nominal_e(cs: ContactSpec, m_eff: float) -> float:
-    if cs.law == "hertz":
+@contextlib.contextmanager
+def _section(spec: StackSpec, cs: ContactSpec, j: int):
+    """Name the section of the file that set an offending value."""
+    try:
+        yield
+    except ParameterError as exc:
+        raise StackFileError(f"{spec.source + ': ' if spec.source else ''}{cs.source} "
+                             f"(interface {j}): {exc}") from exc
+
+
+def _law(cs: ContactSpec, stiffness: float, m_eff: float, v_c: float | None) -> AbstractContactLaw:
+    return make_law(cs.law, stiffness=stiffness, restitution=cs.restitution, effective_mass=m_eff,
+                    calibration_velocity=v_c, chi_map=cs.chi_map, alpha=cs.alpha, damping=cs.damping,
+                    clamp=cs.clamp)
+
+
+def _nominal_e(cs: ContactSpec, stiffness: float, m_eff: float) -> float:
+    """The restitution an interface is designed for: the file's, 1 for an elastic law, the one its raw
+    damping parameter gives (the law's own `restitution_at`) when that does not depend on the impact
+    speed (`registry.LawRow.speed_dependent`), NaN otherwise."""
+    row = LAWS[cs.law]
+    if row.elastic:
         return 1.0
     if cs.restitution is not None:
         return cs.restitution
-    if cs.law == "tsuji" and cs.damping is not None:
-        return calibration.tsuji_restitution(cs.damping, clamp=cs.clamp)
-    if cs.law == "kelvin-voigt" and cs.damping is not None and cs.stiffness is not None:
-        # linear spring-dashpot: e depends only on zeta = c / (2 sqrt(m* k)), not on the speed
-        zeta = cs.damping / (2.0 * math.sqrt(m_eff * cs.stiffness))
-        return max(0.0, calibration.kelvin_voigt_restitution(zeta, clamp=cs.clamp))  # overdamped: ~-1e-16
-    return math.nan  # speed-dependent or given by a raw parameter
+    if row.speed_dependent:
+        return math.nan
+    e = float(_law(cs, stiffness, m_eff, None).restitution_at(1.0, m_eff))
+    return max(0.0, e)  # an overdamped linear contact rounds to ~-1e-16
 
 
 def _approach_speeds(masses, e, ground: bool, v0) -> np.ndarray:
@@ -157,33 +172,22 @@ def _build(spec: StackSpec) -> Built:
     v0 = np.asarray(spec.initial_velocities(n), dtype=float)
     specs = {j: spec.contact_for(j) for j in interfaces}
     m_eff = np.concatenate([m[:1], m[:-1] * m[1:] / (m[:-1] + m[1:])])  # ground: m_1; pair j: reduced mass
+    stiffness = {j: _stiffness(spec, cs, j, n) for j, cs in specs.items()}
     e_nom = np.full(n, math.nan)
     for j, cs in specs.items():
-        e_nom[j] = _nominal_e(cs, float(m_eff[j]))
+        with _section(spec, cs, j):
+            e_nom[j] = _nominal_e(cs, stiffness[j], float(m_eff[j]))
     speeds = _approach_speeds(m, e_nom, ground, v0)
     laws: list[AbstractContactLaw | None] = [None] * n
     for j, cs in specs.items():
         v_c = cs.calibration_velocity
-        if v_c is None and cs.law in ("hunt-crossley", "viscoelastic") and cs.restitution is not None:
+        if v_c is None and LAWS[cs.law].speed_dependent and cs.restitution is not None:
             v_c = float(speeds[j])
             if not (np.isfinite(v_c) and v_c > 0):
                 raise StackFileError(f"{cs.source}.calibration_velocity: the rigid model predicts no "
                                      f"impact at interface {j}; give a calibration_velocity")
-        try:
-            laws[j] = make_law(
-                cs.law,
-                stiffness=_stiffness(spec, cs, j, n),
-                restitution=cs.restitution,
-                effective_mass=float(m_eff[j]),
-                calibration_velocity=v_c,
-                chi_map=cs.chi_map,
-                alpha=cs.alpha,
-                damping=cs.damping,
-                clamp=cs.clamp,
-            )
-        except ParameterError as exc:  # name the section of the file that set the offending value
-            raise StackFileError(f"{spec.source + ': ' if spec.source else ''}{cs.source} "
-                                 f"(interface {j}): {exc}") from exc
+        with _section(spec, cs, j):
+            laws[j] = _law(cs, stiffness[j], float(m_eff[j]), v_c)
     stack = Stack(m, [laws[j] for j in interfaces], gravity=g, ground=ground)
     bodies = spec.stack
     if bodies.velocities is not None:

@@ -69,6 +69,7 @@ from scipy.optimize import brentq
 from scipy.special import beta as _beta_fn
 from scipy.special import lambertw
 
+from . import registry as _registry
 from .errors import ParameterError
 
 __all__ = [
@@ -151,26 +152,10 @@ def _chi_exact(e: float) -> float:
 
 
 CHI_MAPS: dict[str, Callable[[float], float]] = {
-    # Hunt & Crossley (1975), J. Appl. Mech. 42, 440.
-    "hunt-crossley": lambda e: 1.5 * (1.0 - e),
-    # Herbert & McWhannell (1977), J. Eng. Ind. 99, 513.
-    "herbert-mcwhannell": lambda e: 6.0 * (1.0 - e) / ((2.0 * e - 1.0) ** 2 + 3.0),
-    # Lee & Wang (1983), J. Mech. Transm. Autom. Des. 105, 534.
-    "lee-wang": lambda e: 0.75 * (1.0 - e),
-    # Lankarani & Nikravesh (1990), J. Mech. Des. 112, 369.
-    "lankarani-nikravesh": lambda e: 0.75 * (1.0 - e * e),
-    # Gonthier, McPhee, Lange & Piedboeuf (2004), Multibody Syst. Dyn. 11, 209.
-    "gonthier": lambda e: (1.0 - e * e) / e,
-    # Zhiying & Qishao (2006), Acta Mech. Sin. 22, 79 (as quoted by Flores et al. 2011).
-    "zhiying-qishao": lambda e: 0.75 * (1.0 - e * e) * math.exp(2.0 * (1.0 - e)),
-    # Flores, Machado, Silva & Martins (2011), Multibody Syst. Dyn. 25, 357.
-    "flores": lambda e: 8.0 * (1.0 - e) / (5.0 * e),
-    # Hu & Guo (2015), Multibody Syst. Dyn. 35, 131 (the 3(1-e)/(2e) form; references.md).
-    "hu-guo": lambda e: 1.5 * (1.0 - e) / e,
-    # Carvalho & Martins (2019), Mech. Mach. Theory 139, 1: exact for F = K d^p (1 + chi d'/v0).
-    "exact": _chi_exact,
+    name: row.formula or _chi_exact for name, row in _registry.CHI_MAPS.items()
 }
-"""Maps $e \\mapsto \\chi$ for $F = k\\delta^{3/2}(1 + \\chi\\dot\\delta/v_0)$, by configuration name."""
+"""Maps $e \\mapsto \\chi$ for $F = k\\delta^{3/2}(1 + \\chi\\dot\\delta/v_0)$, by configuration name: the
+rows of `hertz_chain.registry.CHI_MAPS` (formulas and sources), the exact map computed here."""
 
 
 def restitution_from_chi(chi: float | np.ndarray) -> float | np.ndarray:
@@ -275,7 +260,7 @@ def chi_map_table(
 
     The produced $e$ is the exact one (`restitution_from_chi`) for the map's $\chi$, so the error of a
     map is ``table[map][target] - target``. Published comparisons: Carvalho & Martins (2019);
-    values for 0.5 and 0.9 are listed in ``references.md``.
+    values for 0.5 and 0.9 are listed in ``docs/references.md``, "Restitution maps".
     """
     names = tuple(CHI_MAPS) if maps is None else maps
     table: dict[str, dict[float, float]] = {}
@@ -291,7 +276,7 @@ def chi_map_table(
 # --------------------------------------------------------------------------------------------------
 # the nondimensional single impact (scipy)
 
-_LAWS = ("hertz", "hunt-crossley", "tsuji", "kelvin-voigt", "viscoelastic")
+_LAWS = tuple(_registry.LAWS)
 
 
 @dataclass(frozen=True)

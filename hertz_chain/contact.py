@@ -34,6 +34,7 @@ from jaxtyping import Array, ArrayLike
 
 from . import _config  # noqa: F401  (float64)
 from . import calibration as _cal
+from . import registry as _registry
 from .errors import ParameterError
 
 __all__ = [
@@ -123,6 +124,14 @@ class Hertz(_HertzianElastic):
         self.k = jnp.asarray(k, dtype=float)
         self.clamp = clamp
 
+    @classmethod
+    def from_config(cls, k, *, restitution=None, damping=None, effective_mass=None, calibration_velocity=None,
+                    chi_map="exact", clamp=True) -> "Hertz":
+        """`make_law`'s constructor (`hertz_chain.registry.LAWS`): elastic, so only `restitution = 1`."""
+        if restitution is not None and restitution != 1.0:
+            raise ParameterError("restitution", restitution, "'hertz' is elastic (e = 1); use a damped law for e < 1")
+        return cls(_stiffness(k), clamp)
+
     def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
         """Always 1 (elastic)."""
         v = _velocity(impact_velocity)
@@ -170,6 +179,16 @@ class HuntCrossley(_HertzianElastic):
         k = _stiffness(k)
         return cls(k, _cal.hunt_crossley_alpha(restitution, calibration_velocity, chi_map), clamp)
 
+    @classmethod
+    def from_config(cls, k, *, restitution=None, damping=None, effective_mass=None, calibration_velocity=None,
+                    chi_map="exact", clamp=True) -> "HuntCrossley":
+        """`make_law`'s constructor: ``alpha = damping``, or calibrated to ``restitution`` at
+        ``calibration_velocity`` with ``chi_map``."""
+        if restitution is None:
+            return cls(_stiffness(k), damping, clamp)
+        v = _positive(_require(calibration_velocity, "calibration_velocity", cls.name), "calibration_velocity")
+        return cls.from_restitution(k, restitution, v, chi_map, clamp)
+
     def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
         """Exact ``e(chi = alpha v)``; independent of ``k``, ``m*`` and the clamp."""
         return _cal.hunt_crossley_restitution(np.asarray(self.alpha), _velocity(impact_velocity))
@@ -211,6 +230,16 @@ class Tsuji(_HertzianElastic):
         k, m = _stiffness(k), _positive(m_eff, "effective_mass")
         return cls(k, _cal.tsuji_eta(restitution, clamp), m, clamp)
 
+    @classmethod
+    def from_config(cls, k, *, restitution=None, damping=None, effective_mass=None, calibration_velocity=None,
+                    chi_map="exact", clamp=True) -> "Tsuji":
+        """`make_law`'s constructor: ``eta = damping``, or calibrated to ``restitution``; the
+        ``effective_mass`` is always needed (it is part of the law)."""
+        m = _positive(_require(effective_mass, "effective_mass", cls.name), "effective_mass")
+        if restitution is None:
+            return cls(_stiffness(k), damping, m, clamp)
+        return cls.from_restitution(k, restitution, m, clamp)
+
     def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
         """Restitution for ``eta`` (the same at every impact speed)."""
         v = _velocity(impact_velocity)
@@ -250,6 +279,16 @@ class KelvinVoigt(AbstractContactLaw):
         k, m = _stiffness(k), _positive(m_eff, "effective_mass")
         zeta = _cal.kelvin_voigt_damping_ratio(restitution, clamp)
         return cls(k, 2.0 * zeta * np.sqrt(m * k), clamp)
+
+    @classmethod
+    def from_config(cls, k, *, restitution=None, damping=None, effective_mass=None, calibration_velocity=None,
+                    chi_map="exact", clamp=True) -> "KelvinVoigt":
+        """`make_law`'s constructor: ``c = damping``, or calibrated to ``restitution`` (needs
+        ``effective_mass``)."""
+        if restitution is None:
+            return cls(_stiffness(k), damping, clamp)
+        m = _positive(_require(effective_mass, "effective_mass", cls.name), "effective_mass")
+        return cls.from_restitution(k, restitution, m, clamp)
 
     def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
         """Restitution for ``zeta = c / (2 sqrt(m_eff k))`` (the same at every impact speed)."""
@@ -307,6 +346,17 @@ class Viscoelastic(_HertzianElastic):
         xi = _cal.viscoelastic_xi(restitution, clamp)
         return cls(k, _cal.viscoelastic_A_from_xi(xi, k, m, v), clamp)
 
+    @classmethod
+    def from_config(cls, k, *, restitution=None, damping=None, effective_mass=None, calibration_velocity=None,
+                    chi_map="exact", clamp=True) -> "Viscoelastic":
+        """`make_law`'s constructor: ``A = damping``, or calibrated to ``restitution`` at
+        ``calibration_velocity`` (needs ``effective_mass``)."""
+        if restitution is None:
+            return cls(_stiffness(k), damping, clamp)
+        m = _positive(_require(effective_mass, "effective_mass", cls.name), "effective_mass")
+        v = _positive(_require(calibration_velocity, "calibration_velocity", cls.name), "calibration_velocity")
+        return cls.from_restitution(k, restitution, m, v, clamp)
+
     def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
         """``e(xi)`` with ``xi = (3/2) A (k/m_eff)^{2/5} v^{1/5}``; falls as ``v`` rises."""
         v = _velocity(impact_velocity)
@@ -323,16 +373,11 @@ class Viscoelastic(_HertzianElastic):
 # --------------------------------------------------------------------------------------------------
 # validation helpers (concrete values only) and the factory used by the stack-file reader
 
-LAW_NAMES: tuple[str, ...] = ("hertz", "hunt-crossley", "tsuji", "kelvin-voigt", "viscoelastic")
-"""Configuration names of the contact laws, as used in stack files and by `make_law`."""
+LAW_NAMES: tuple[str, ...] = tuple(_registry.LAWS)
+"""Configuration names of the contact laws, as used in stack files and by `make_law`
+(`hertz_chain.registry.LAWS`)."""
 
-_LAW_CLASSES = {
-    "hertz": Hertz,
-    "hunt-crossley": HuntCrossley,
-    "tsuji": Tsuji,
-    "kelvin-voigt": KelvinVoigt,
-    "viscoelastic": Viscoelastic,
-}
+_LAW_CLASSES = {name: globals()[row.cls] for name, row in _registry.LAWS.items()}
 
 
 def _scalar(a):
@@ -422,6 +467,7 @@ def make_law(
     if not isinstance(name, str) or name.strip().lower() not in _LAW_CLASSES:
         raise ParameterError("law", name, f"one of {list(LAW_NAMES)}")
     law = name.strip().lower()
+    row = _registry.LAWS[law]
     k = _stiffness(stiffness)
     if not isinstance(clamp, (bool, np.bool_)):
         raise ParameterError("clamp", clamp, "true or false")
@@ -429,12 +475,11 @@ def make_law(
     chi_map = "exact" if chi_map is None else chi_map
     if chi_map not in _cal.CHI_MAPS:
         raise ParameterError("chi_map", chi_map, f"one of {sorted(_cal.CHI_MAPS)}")
-    if law != "hunt-crossley" and chi_map != "exact":
-        raise ParameterError("chi_map", chi_map, f"only used by 'hunt-crossley', not by {law!r}")
+    if not row.chi_map and chi_map != "exact":
+        raise ParameterError("chi_map", chi_map, f"only used by laws that take one, not by {law!r}")
 
-    # the law's own damping parameter, under any of its accepted keywords
-    own = {"hunt-crossley": ("alpha",), "tsuji": ("eta", "damping"), "kelvin-voigt": ("damping",),
-           "viscoelastic": ("A", "damping"), "hertz": ()}[law]
+    # the law's own damping parameter, under any of its accepted keywords (`registry.LawRow.keywords`)
+    own = row.keywords
     given = {"alpha": alpha, "eta": eta, "damping": damping, "A": A}
     for key, value in given.items():
         if value is not None and key not in own:
@@ -443,44 +488,13 @@ def make_law(
     own_given = [(key, given[key]) for key in own if given[key] is not None]
     if len(own_given) > 1:
         raise ParameterError(own_given[1][0], own_given[1][1], f"give only one of {' / '.join(own)}")
-    if restitution is not None:
-        e = _cal.check_restitution(restitution)
-        if own_given:
-            raise ParameterError(own_given[0][0], own_given[0][1],
-                                 "give either restitution or the law's own damping parameter, not both")
-    else:
-        e = None
-
-    if law == "hertz":
-        if e is not None and e != 1.0:
-            raise ParameterError("restitution", restitution,
-                                 "'hertz' is elastic (e = 1); use a damped law for e < 1")
-        return Hertz(k, clamp)
-
-    if e is None and not own_given:
-        raise ParameterError("restitution", None,
-                             f"the {law!r} law needs restitution or {' / '.join(own)}")
-    param = None if e is not None else _nonnegative(own_given[0][1], own_given[0][0])
-
-    if law == "hunt-crossley":
-        if e is None:
-            return HuntCrossley(k, param, clamp)
-        v = _positive(_require(calibration_velocity, "calibration_velocity", law), "calibration_velocity")
-        return HuntCrossley.from_restitution(k, e, v, chi_map, clamp)
-
-    if law == "tsuji":
-        m = _positive(_require(effective_mass, "effective_mass", law), "effective_mass")
-        return Tsuji(k, param, m, clamp) if e is None else Tsuji.from_restitution(k, e, m, clamp)
-
-    if law == "kelvin-voigt":
-        if e is None:
-            return KelvinVoigt(k, param, clamp)
-        m = _positive(_require(effective_mass, "effective_mass", law), "effective_mass")
-        return KelvinVoigt.from_restitution(k, e, m, clamp)
-
-    # viscoelastic
-    if e is None:
-        return Viscoelastic(k, param, clamp)
-    m = _positive(_require(effective_mass, "effective_mass", law), "effective_mass")
-    v = _positive(_require(calibration_velocity, "calibration_velocity", law), "calibration_velocity")
-    return Viscoelastic.from_restitution(k, e, m, v, clamp)
+    e = _cal.check_restitution(restitution) if restitution is not None else None
+    if e is not None and own_given:
+        raise ParameterError(own_given[0][0], own_given[0][1],
+                             "give either restitution or the law's own damping parameter, not both")
+    if not row.elastic and e is None and not own_given:
+        raise ParameterError("restitution", None, f"the {law!r} law needs restitution or {' / '.join(own)}")
+    param = _nonnegative(own_given[0][1], own_given[0][0]) if own_given else None
+    return _LAW_CLASSES[law].from_config(k, restitution=e, damping=param, effective_mass=effective_mass,
+                                         calibration_velocity=calibration_velocity, chi_map=chi_map,
+                                         clamp=clamp)

@@ -8,7 +8,7 @@ assumed about the sampling, so the solver's adaptive steps can be used as they a
 
 Definitions (the classical shock-test vocabulary: MIL-STD-810H Method 516.8 and MIL-STD-883
 Method 2002 specify half-sine pulses by their *peak* and *duration*; the duration of a measured pulse
-is read between its 10 % points, as in references.md, "Shock pulses"):
+is read between its 10 % points, as in docs/references.md, "Shock pulses"):
 
 * **dominant sign** `s`: +1 if `max(a) >= -min(a)`, else −1 (ties go to +1). All the metrics below are
   taken on `s·a`, so that the main pulse is positive; `peak` is a magnitude (> 0) and `sign` keeps `s`.

@@ -1,6 +1,8 @@
 """Rigid-body (independent-collision) theory of velocity amplifiers: the seed paper's closed forms.
 
-Everything here follows Sections 2–5 of the seed paper (`../shared/seed/`), Eqs 1–30, and is plain
+Everything here follows Sections 2–5 of the seed paper (Rodgers, Goyal, Kelly & Sheehy, *The dynamics
+of multiple pair-wise collisions in a chain for designing optimal shock amplifiers*, Shock and
+Vibration, 2009; `docs/references.md, "Seed paper"`), Eqs 1–30, and is plain
 numpy/scipy (no JAX). Conventions (see `notes/CONVENTIONS.md`): masses are numbered from the bottom /
 from the striker, `m_1` is the heaviest; pair-wise ratios are `r_{i+1,i} = m_{i+1}/m_i` (Eq 5),
 `R = m_n/m_1 = prod r` (Eq 14); velocities are upward-positive.

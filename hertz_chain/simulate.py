@@ -15,13 +15,13 @@ overlap of the stiffest contact (the root of `potential(delta) = m* V^2/2`, whic
 `(5 m* V^2/(4k))^{2/5}`); velocities in units of `V`, the drop speed (the largest initial speed, or
 relative speed, in general; 1 m/s if everything is at rest); dissipated energies in units of
 `E = sum(m) V^2/2`. So `rtol`/`atol` mean the same for every design (Hertz contact: Johnson, *Contact
-Mechanics*, 1985, §11.1; references.md).
+Mechanics*, 1985, §11.1; docs/references.md, "Hertz single impact").
 
 **Solvers.** `"tsit5"` (default: `UnrolledTsit5`, diffrax's Tsit5 with its stages written out, 2.2x
 faster per step on a 10-mass stack: 5.6 -> 2.5 us, and 0.55 -> 0.38 ms per design in a 5-mass batch over 2
 cores), `"tsit5-diffrax"`, `"dopri8"`, `"kvaerno5"` (implicit, with a corrected Newton
 iteration), `"kvaerno5-stock"`, or any diffrax solver instance. The default is Tsit5: the stack is not
-stiff for Hertzian contact (`dt rho(J) <= 0.32` along the steps, references.md), so an implicit solver
+stiff for Hertzian contact (`dt rho(J) <= 0.32` along the steps, docs/references.md, "Solver notes"), so an implicit solver
 buys nothing. Measured (2-core CPU, 5/10 masses, ratio 0.5, Hertz, gaps 0.1 mm, rtol = atol = 1e-8, per
 `simulate` call): Tsit5 179/313 steps, 6.4/6.5 ms; Dopri8 157/264 steps, 6.6/8.1 ms; Kvaerno5 (fixed)
 187/318 steps (30/46 rejected), 19/43 ms; Kvaerno5 (stock) 538/831 steps (122/180 rejected), 46/79 ms. diffrax 0.7.2's implicit
@@ -123,10 +123,10 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optimistix as optx
 from jaxtyping import Array, ArrayLike
 
 from . import _config  # noqa: F401  (float64)
+from . import registry as _registry
 from ._export import cached_jit
 from .contact import AbstractContactLaw
 from .errors import ParameterError, SolverError
@@ -149,7 +149,7 @@ __all__ = [
     "restitution",
 ]
 
-HERTZ_TIME = 2.94328  # t_c = 2.94328 delta_max / v (Hertz; references.md)
+HERTZ_TIME = 2.94328  # t_c = 2.94328 delta_max / v (Hertz; docs/references.md, "Hertz single impact")
 
 #: What `simulate(..., until=...)` accepts: stop at the end of the first cascade, or go on to `t_max`.
 UNTIL = ("cascade", "t_max")
@@ -160,7 +160,7 @@ class Tolerances(eqx.Module):
     """Step-size control, in the scaled units of the module docstring.
 
     - `rtol`, `atol`: PID controller tolerances (scaled state, so `atol` is relative to the scales).
-    - `pcoeff`, `icoeff`: PID coefficients (0.4, 0.3: references.md).
+    - `pcoeff`, `icoeff`: PID coefficients (0.4, 0.3: docs/references.md, "Solver notes").
     - `max_step`: the largest step, in units of the contact time `T` (0.5 never steps over a contact).
     - `first_step`: the first step, in units of `T`.
     - `resolve_onsets`: add one auxiliary state per interface, `z_j' = sqrt(delta_j+/L)`, whose local
@@ -236,31 +236,19 @@ class UnrolledTsit5(dfx.AbstractAdaptiveSolver):
 
 
 def make_solver(name: str | dfx.AbstractSolver, tolerances: Tolerances | None = None) -> dfx.AbstractSolver:
-    """A diffrax solver from a name: `"tsit5"` (`UnrolledTsit5`), `"tsit5-diffrax"` (`diffrax.Tsit5`, the
-    same method with its stages in a loop), `"dopri5"`, `"dopri8"`, `"kvaerno5"` (implicit, with a
-    Newton iteration that has a correct termination test), `"kvaerno5-stock"` (diffrax 0.7.2's default
-    `VeryChord`, for comparison). A solver instance is returned unchanged."""
+    """A diffrax solver from a name of `hertz_chain.registry.SOLVERS` (`"tsit5"`, the default: this
+    module's `UnrolledTsit5`; `"tsit5-diffrax"`, `"dopri5"`, `"dopri8"`, `"kvaerno5"` (implicit, with a
+    Chord iteration that terminates properly), `"kvaerno5-stock"`). A solver instance is returned
+    unchanged.
+
+    **Raises** `ParameterError` for a name that is not in the registry."""
     if isinstance(name, dfx.AbstractSolver):
         return name
-    tol = tolerances or Tolerances()
-    key = str(name).lower()
-    if key == "tsit5":
-        return UnrolledTsit5()
-    if key == "tsit5-diffrax":
-        return dfx.Tsit5()
-    if key == "dopri5":
-        return dfx.Dopri5()
-    if key == "dopri8":
-        return dfx.Dopri8()
-    if key == "kvaerno5":
-        # Chord iterations (Jacobian frozen per step) stopped on a proper Cauchy test at a tenth of
-        # the step controller's tolerances (measured best among Chord/Newton at 1e-2, 1e-1, 1 x tol).
-        rf = optx.Chord(rtol=tol.rtol * 1e-1, atol=tol.atol * 1e-1)
-        return dfx.Kvaerno5(root_finder=rf, root_find_max_steps=10)
-    if key == "kvaerno5-stock":
-        return dfx.Kvaerno5()
-    raise ParameterError("solver", name, "'tsit5', 'tsit5-diffrax', 'dopri5', 'dopri8', 'kvaerno5', "
-                         "'kvaerno5-stock' or a diffrax solver")
+    row = _registry.SOLVERS.get(str(name).lower())
+    if row is None:
+        raise ParameterError("solver", name, f"one of {', '.join(repr(k) for k in _registry.SOLVERS)} or a "
+                             "diffrax solver")
+    return row.make(tolerances or Tolerances())
 
 
 def _make_adjoint(adjoint, max_steps: int) -> dfx.AbstractAdjoint:

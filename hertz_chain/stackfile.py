@@ -289,6 +289,9 @@ from typing import Any, Mapping
 
 from .constants import MAX_MASSES, STANDARD_GRAVITY
 from .errors import StackFileError
+from .registry import CHI_MAPS as _CHI_MAP_ROWS
+from .registry import LAWS
+from .registry import SOLVERS as _SOLVER_ROWS
 
 __all__ = [
     "STANDARD_GRAVITY",
@@ -364,25 +367,19 @@ LIMITS = {
 """Dimension -> (smallest non-zero magnitude, largest magnitude), SI. A magnitude outside is an error
 naming the key; 0 is left to each key's own sign rule (a mass must still be > 0)."""
 
-DAMPING_LIMITS = {"tsuji": (1e6, ""), "kelvin-voigt": (1e9, " N s/m"), "viscoelastic": (1.0, " s")}
-"""Largest `damping` per law: Tsuji's eta (plain), Kelvin-Voigt's c (N s/m), the viscoelastic A (s)."""
-
 _UNITS = {"mass": "kg", "length": "m", "time": "s", "velocity": "m/s", "acceleration": "m/s^2",
           "pressure": "Pa", "density": "kg/m^3", "hertz_stiffness": "N/m^1.5", "linear_stiffness": "N/m",
           "viscous_damping": "N s/m", "inverse_velocity": "s/m"}
 
-CONTACT_LAWS = ("hertz", "hunt-crossley", "tsuji", "kelvin-voigt", "viscoelastic")
-CHI_MAPS = (
-    "hunt-crossley",
-    "herbert-mcwhannell",
-    "lankarani-nikravesh",
-    "gonthier",
-    "flores",
-    "hu-guo",
-    "zhiying-qishao",
-    "exact",
-)
-SOLVERS = ("tsit5", "dopri8", "kvaerno5")
+# the vocabularies: one table each in `hertz_chain.registry`
+CONTACT_LAWS = tuple(LAWS)
+CHI_MAPS = tuple(_CHI_MAP_ROWS)
+SOLVERS = tuple(_SOLVER_ROWS)
+
+DAMPING_LIMITS = {name: (row.damping_max, f" {_UNITS[row.damping_dimension]}" if row.damping_dimension in _UNITS
+                         else "") for name, row in LAWS.items() if row.damping == "damping"}
+"""Largest `damping` per law (`registry.LawRow.damping_max`): Tsuji's eta (plain), Kelvin-Voigt's c
+(N s/m), the viscoelastic A (s)."""
 DESIGN_KINDS = ("mvg", "met")
 SHAPES = ("sphere", "flat")
 
@@ -405,8 +402,6 @@ _CONTACT_KEYS = (
 _SOLVER_KEYS = ("solver", "rtol", "atol", "t_max", "until", "max_steps", "n_output", "dt_output")
 #: `solver.until`: stop when the first cascade ends, or go on to `t_max` and report rebounds.
 UNTIL = ("cascade", "t_max")
-
-_HERTZIAN = ("hertz", "hunt-crossley", "tsuji", "viscoelastic")
 
 # dimension name -> (a unit of that dimension, how the error message describes it)
 _DIMENSIONS = {
@@ -675,13 +670,15 @@ def _ureg():
 
     pint parses its definitions file on every start (0.13 s, a twentieth of a warm `hertz-chain
     simulate`); with `cache_folder` it keeps the parsed result on disk, keyed by the file's content, and
-    later starts take 0.02 s. The folder sits next to the JAX cache (`~/.cache/hertz_chain/pint`);
-    `HERTZ_CHAIN_NO_CACHE=1` turns it off, and a folder that cannot be used falls back to no cache."""
+    later starts take 0.02 s. The folder sits next to the JAX cache (`hertz_chain._cache.cache_dir("pint")`:
+    `~/.cache/hertz_chain/pint`, or `$HERTZ_CHAIN_CACHE_DIR/pint`); `HERTZ_CHAIN_NO_CACHE=1` turns it off,
+    and a folder that cannot be used falls back to no cache."""
     import pint
 
-    if not os.environ.get("HERTZ_CHAIN_NO_CACHE"):
-        folder = os.path.join(os.environ.get("XDG_CACHE_HOME", os.path.join(os.path.expanduser("~"), ".cache")),
-                              "hertz_chain", "pint")
+    from ._cache import cache_dir
+
+    folder = cache_dir("pint")
+    if folder is not None:
         try:
             os.makedirs(folder, exist_ok=True)
             return pint.UnitRegistry(cache_folder=folder)
@@ -899,23 +896,11 @@ def _resolve_contact(merged: dict, label: str, *, ground: bool) -> ContactSpec:
         raise _error(_join(label, "law"), f"missing; one of {', '.join(repr(c) for c in CONTACT_LAWS)}")
     law_raw, law_key = merged["law"]
     law = _choice(law_raw, law_key, CONTACT_LAWS)
-    allowed = {
-        "hertz": {"stiffness", "clamp"},
-        "hunt-crossley": {"stiffness", "clamp", "restitution", "chi_map", "calibration_velocity", "alpha"},
-        "tsuji": {"stiffness", "clamp", "restitution", "damping"},
-        "kelvin-voigt": {"stiffness", "clamp", "restitution", "damping"},
-        "viscoelastic": {"stiffness", "clamp", "restitution", "calibration_velocity", "damping"},
-    }[law]
-    hints = {
-        "hertz": "the 'hertz' law is elastic (no damping)",
-        "hunt-crossley": "'hunt-crossley' takes alpha, or restitution with chi_map",
-        "tsuji": "'tsuji' takes restitution or damping (eta)",
-        "kelvin-voigt": "'kelvin-voigt' takes restitution or damping (c, N s/m)",
-        "viscoelastic": "'viscoelastic' takes restitution (with calibration_velocity) or damping (A, s)",
-    }
+    row = LAWS[law]
+    allowed = row.file_keys()
     for k, (raw, key) in merged.items():
         if k != "law" and k not in allowed:
-            raise _error(key, f"not used by law {law!r}; {hints[law]}")
+            raise _error(key, f"not used by law {law!r}; {row.hint()}")
 
     def get(k):
         return merged[k] if k in merged else (None, None)
@@ -923,11 +908,11 @@ def _resolve_contact(merged: dict, label: str, *, ground: bool) -> ContactSpec:
     stiffness = None
     if "stiffness" in merged:
         raw, key = merged["stiffness"]
-        stiffness = _positive(raw, key, "linear_stiffness" if law == "kelvin-voigt" else "hertz_stiffness")
-    elif law == "kelvin-voigt":
+        stiffness = _positive(raw, key, row.stiffness)
+    elif not row.hertzian:
         raise _error(
             _join(label, "stiffness"),
-            "missing; 'kelvin-voigt' needs a stiffness in N/m (it cannot be computed from "
+            f"missing; {law!r} needs a stiffness in {_UNITS[row.stiffness]} (it cannot be computed from "
             "materials)",
         )
 
@@ -940,17 +925,15 @@ def _resolve_contact(merged: dict, label: str, *, ground: bool) -> ContactSpec:
                if ground else "must be in (0, 1]")
         _check(restitution >= MIN_RESTITUTION, key, raw,
                f"must be >= {MIN_RESTITUTION:g} (the contact laws are calibrated for {MIN_RESTITUTION:g} <= e <= 1)")
-    alpha = None
-    if "alpha" in merged:
-        raw, key = merged["alpha"]
-        alpha = _non_negative(raw, key, "inverse_velocity")
-    damping = None
-    if "damping" in merged:
-        raw, key = merged["damping"]
-        dim = {"tsuji": "dimensionless", "kelvin-voigt": "viscous_damping", "viscoelastic": "time"}[law]
-        damping = _non_negative(raw, key, dim)
-        hi, unit = DAMPING_LIMITS[law]
-        _check(damping <= hi, key, raw, f"out of range; law {law!r} takes a damping of at most {hi:g}{unit}")
+    own = None  # the law's own damping parameter (`registry.LawRow.damping`: `alpha` or `damping`)
+    if row.damping is not None and row.damping in merged:
+        raw, key = merged[row.damping]
+        own = _non_negative(raw, key, row.damping_dimension)
+        unit = f" {_UNITS[row.damping_dimension]}" if row.damping_dimension in _UNITS else ""
+        _check(own <= row.damping_max, key, raw,
+               f"out of range; law {law!r} takes a {row.damping} of at most {row.damping_max:g}{unit}")
+    alpha = own if row.damping == "alpha" else None
+    damping = own if row.damping == "damping" else None
     chi_map = None
     if "chi_map" in merged:
         raw, key = merged["chi_map"]
@@ -961,9 +944,9 @@ def _resolve_contact(merged: dict, label: str, *, ground: bool) -> ContactSpec:
         calibration_velocity = _positive(raw, key, "velocity")
     clamp = _bool(*merged["clamp"]) if "clamp" in merged else True
 
-    if law != "hertz":
+    if not row.elastic:
         given = [k for k in ("restitution", "alpha", "damping") if k in merged]
-        options = "alpha or restitution" if law == "hunt-crossley" else "restitution or damping"
+        options = f"restitution or {row.damping}"
         if not given:
             raise _error(_join(label, "restitution"), f"missing; law {law!r} needs {options}")
         if len(given) > 1:
@@ -978,7 +961,7 @@ def _resolve_contact(merged: dict, label: str, *, ground: bool) -> ContactSpec:
                         merged[k][1],
                         "only used to calibrate a restitution; remove it or give restitution",
                     )
-        elif law == "hunt-crossley" and chi_map is None:
+        elif row.chi_map and chi_map is None:
             chi_map = "exact"
     return ContactSpec(
         law, stiffness, restitution, chi_map, calibration_velocity, alpha, damping, clamp, label

@@ -94,7 +94,7 @@ print("A2(r=1/3, g=-1, e=1) =", a2_third)
 #
 # Eq 7: `g = (e − 1/r)/(1 + e)` makes `A1 = 0`. Eq 8 is printed with `r_{2,3}`, a mass that does not
 # exist in the two-body problem; from Eq 4 with `A2 = 0` the condition is `g = (1 + e)/(e − r_{2,1})`
-# (references.md, "misprints"). We check both by substitution into Eqs 3–4 and into Eqs 1–2.
+# (docs/references.md, "Seed paper misprints"). We check both by substitution into Eqs 3–4 and into Eqs 1–2.
 #
 # A finding the figure hides: the corrected `V2 = 0` surface lies in the collision range `g < 1` only
 # where `r > e` (then `g < 0`, a head-on impact). For `r < e` the formula gives `g > 1`: the masses

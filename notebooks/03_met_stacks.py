@@ -111,7 +111,7 @@ assert rigid.met_gain(1.0, 7) == 7  # Eq 29, e = 1: G_n = n
 assert rigid.met_gain_limit(0.5) == 1.0 and np.all(rigid.met_gain(0.5, np.arange(2, 50)) < 1)
 assert np.isclose(rigid.met_gain(0.8, 400), 4.0, rtol=1e-12)  # Eq 30: 0.8/0.2
 print("MET, e = 0.8, n = 10: G =", rigid.met_gain(0.8, 10))
-assert np.isclose(rigid.met_gain(0.8, 10), 3.5705, atol=5e-5)  # Eq 29; references.md [num]
+assert np.isclose(rigid.met_gain(0.8, 10), 3.5705, atol=5e-5)  # Eq 29; docs/references.md, "Seed paper key numbers"
 
 # %% [markdown]
 # ## Fig 12 — `m_i/m_1` against the mass number; the `R = 0.1` example

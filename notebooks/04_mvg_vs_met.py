@@ -262,7 +262,7 @@ assert np.isclose(final_mvg[3], 3.7373, atol=5e-5)
 #    is significantly lower (about 23 %)": Eq 29 against Eq 20 gives 3.5705 against 5.0407, **29.2 %**
 #    lower (the MVG gain is 41 % higher). Read as velocities in the frame falling with `v_ff`
 #    (`G + 1`, the speed the top mass gains relative to the falling stack), it is 24.3 % lower — the
-#    closest reading to "about 23 %". **Does not reproduce in `G`** (6.2 points off; references.md).
+#    closest reading to "about 23 %". **Does not reproduce in `G`** (6.2 points off; docs/references.md, "Seed paper key numbers").
 # 3. "The ten-mass MVG system has a slightly higher velocity gain than the MET system at the expense
 #    of having 50 % additional total mass": gain 3.8645 vs 3.5705 (+8.2 %, "slightly higher":
 #    reproduces); total mass 21.477 kg, **+45.5 %** over the MET stack — 4.5 points short of 50 % —

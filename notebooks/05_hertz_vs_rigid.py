@@ -31,7 +31,7 @@
 #   0.3 mm gaps, where neighbouring contacts partly overlap in time.
 # * **Design rule.** Mass `j` is pushed by the contact below it (interface `j−1`) for the Hertz
 #   contact time `t_c,j−1` (`t_c = 3.21807 (m*/k)^{2/5} u^{-1/5}` at that contact's rigid approach
-#   speed, references.md); meanwhile its speed relative to mass `j+1` rises from 0 to `u_j`, the
+#   speed, docs/references.md, "Hertz single impact"); meanwhile its speed relative to mass `j+1` rises from 0 to `u_j`, the
 #   approach speed of the next pair, so it closes about `½ u_j t_c,j−1` of the gap. The nondimensional
 #   gap `Π = min_j δ_gap,j / (t_c,j−1 u_j)` (`j = 1 … n−1`) therefore decides, with `Π = ½` the
 #   estimate for sequential contacts. Measured: the rigid gain holds to 1 % for `Π > 0.32`, to 0.1 %
@@ -103,7 +103,7 @@ def contact_scale(masses, e, k, v):
     hit, _ = rigid.cascade_velocities(ms, e, ground_restitution=e)
     u = v * np.concatenate([[1.0], hit[:-1] + 1.0])
     tc = np.array([calibration.hertz_impact(mj, k, uj)["contact_time"] for mj, uj in zip(me, u)])
-    tc_formula = 3.21807 * (me / k) ** 0.4 * u**-0.2  # references.md (Hertz single impact)
+    tc_formula = 3.21807 * (me / k) ** 0.4 * u**-0.2  # docs/references.md, "Hertz single impact"
     assert np.allclose(tc, tc_formula, rtol=1e-5)
     return u, tc, tc[:-1] * u[1:]
 

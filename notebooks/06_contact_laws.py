@@ -23,7 +23,7 @@
 #    Hertz `e = 1`; Tsuji and Kelvin–Voigt constant; Hunt–Crossley falling with `χ = αv` (exact map of
 #    Carvalho & Martins 2019); viscoelastic falling with `ξ ∝ v^{1/5}` (Brilliantov et al. 1996).
 # 2. **Calibration maps** — the `e` that each published Hunt–Crossley map `χ(e)` really produces
-#    (`chi_map_table`), against the values listed in `references.md`, and checked by simulation.
+#    (`chi_map_table`), against the values listed in `docs/references.md, "Restitution maps"`, and checked by simulation.
 #    Also the effect of the no-tension clamp on the Tsuji and Kelvin–Voigt calibrations.
 # 3. **Pulse shapes** — force and acceleration against time for the same impact under each law.
 #
@@ -43,7 +43,7 @@ from hertz_chain import calibration
 
 T0 = time.perf_counter()
 M, K, E, VC = 1.0, 1e9, 0.8, 1.0
-TC_HERTZ = 3.21807 * (M / K) ** 0.4 * VC**-0.2  # references.md: Hertz contact time
+TC_HERTZ = 3.21807 * (M / K) ** 0.4 * VC**-0.2  # docs/references.md, "Hertz single impact"
 K_LIN = M * (np.pi / TC_HERTZ) ** 2
 TOL = hc.Tolerances(rtol=1e-11, atol=1e-11)
 
@@ -61,10 +61,10 @@ print(f"Hertz contact time at 1 m/s: {TC_HERTZ * 1e3:.4f} ms; k_lin = {K_LIN:.4e
 # ## 1. Restitution against impact speed
 #
 # Reference values: Hertz 1 (elastic); Hunt–Crossley `e = [1 + W₀(−(1+χ)e^{−(1+χ)})]/χ`, `χ = αv`
-# (references.md, exact for any `k`, with or without the clamp); Tsuji and Kelvin–Voigt `e = 0.8` at
+# (docs/references.md, "Damped Hertz laws": exact for any `k`, with or without the clamp); Tsuji and Kelvin–Voigt `e = 0.8` at
 # every speed (their nondimensional equations contain no `v`); viscoelastic `e(ξ)`,
 # `ξ = (3/2) A (k/m*)^{2/5} v^{1/5}`, from the scipy integration of `calibration` (and, for comparison,
-# the Ramírez et al. 1999 series and the Müller & Pöschel 2011 Padé fit of references.md).
+# the Ramírez et al. 1999 series and the Müller & Pöschel 2011 Padé fit of docs/references.md, "Damped Hertz laws").
 
 # %%
 vs = np.geomspace(0.1, 10.0, 5 if QUICK else 13)
@@ -118,7 +118,7 @@ show(fig, "contact_restitution_vs_velocity")
 # ### Hunt–Crossley `χ(e)` maps: the restitution they really produce
 #
 # `F = kδ^{3/2}(1 + χ δ̇/v₀)`. Each published map turns a target `e` into `χ`; the table gives the
-# exact `e` of that `χ` (`chi_map_table`). Against references.md (target 0.5: HC 0.663, LN 0.725,
+# exact `e` of that `χ` (`chi_map_table`). Against docs/references.md, "Restitution maps" (target 0.5: HC 0.663, LN 0.725,
 # HM 0.594, Gonthier 0.488, Flores 0.470, Hu–Guo 0.488; target 0.9: 0.909, 0.913, 0.901, 0.876,
 # 0.894, 0.900; exact `χ` for `e` = 0.1/0.3/0.5/0.7/0.9: 9.998/3.087/1.433/0.635/0.166) every value
 # reproduces to the three decimals given. The simulated impact (diffrax) with each map's `χ` gives the
@@ -127,19 +127,19 @@ show(fig, "contact_restitution_vs_velocity")
 # %%
 targets = (0.1, 0.3, 0.5, 0.7, 0.9)
 table = hc.chi_map_table(targets=targets)
-published = {  # references.md
+published = {  # docs/references.md, "Restitution maps"
     ("hunt-crossley", 0.5): 0.663, ("lankarani-nikravesh", 0.5): 0.725, ("herbert-mcwhannell", 0.5): 0.594,
     ("gonthier", 0.5): 0.488, ("flores", 0.5): 0.470, ("hu-guo", 0.5): 0.488,
     ("hunt-crossley", 0.9): 0.909, ("lankarani-nikravesh", 0.9): 0.913, ("herbert-mcwhannell", 0.9): 0.901,
     ("gonthier", 0.9): 0.876, ("flores", 0.9): 0.894, ("hu-guo", 0.9): 0.900,
 }
 for (name, tgt), val in published.items():
-    assert abs(table[name][tgt] - val) <= 5e-4, (name, tgt)  # references.md, 3 decimals
+    assert abs(table[name][tgt] - val) <= 5e-4, (name, tgt)  # docs/references.md, "Restitution maps", 3 decimals
 chi_exact_ref = {0.1: 9.998, 0.3: 3.087, 0.5: 1.433, 0.7: 0.635, 0.9: 0.166}
 for tgt, val in chi_exact_ref.items():
-    assert abs(hc.chi_from_restitution(tgt, "exact") - val) <= 5e-4  # references.md [num]
+    assert abs(hc.chi_from_restitution(tgt, "exact") - val) <= 5e-4  # docs/references.md, "Restitution maps" [num]
 assert all(abs(table["exact"][t] - t) < 1e-12 for t in targets)
-# closed forms of the maps, typed in from references.md
+# closed forms of the maps, typed in from docs/references.md, "Restitution maps"
 typed = {"hunt-crossley": lambda e: 1.5 * (1 - e), "herbert-mcwhannell": lambda e: 6 * (1 - e) / ((2 * e - 1) ** 2 + 3),
          "lee-wang": lambda e: 0.75 * (1 - e), "lankarani-nikravesh": lambda e: 0.75 * (1 - e * e),
          "gonthier": lambda e: (1 - e * e) / e, "zhiying-qishao": lambda e: 0.75 * (1 - e * e) * np.exp(2 * (1 - e)),
@@ -172,7 +172,7 @@ for name in hc.CHI_MAPS:
     produced = calibration.restitution_from_chi(np.array([hc.chi_from_restitution(t, name) for t in tg]))
     ax.plot(tg, produced, lw=1.5 if name == "exact" else 1, ls="-" if name == "exact" else "--", label=name)
 ax.set(xlabel="target e", ylabel="e actually produced (exact map)",
-       title="Hunt–Crossley χ(e) maps: the e they produce (no paper figure; references.md values reproduced)")
+       title="Hunt–Crossley χ(e) maps: the e they produce (no paper figure; docs/references.md values reproduced)")
 ax.legend(fontsize=7)
 show(fig, "contact_chi_maps")
 
@@ -180,7 +180,7 @@ show(fig, "contact_chi_maps")
 # ### The no-tension clamp (Tsuji, Kelvin–Voigt)
 #
 # With the clamp `F ≥ 0` the bodies separate where the force reaches zero, before the overlap does, so
-# the textbook (unclamped) damping gives a *larger* `e` than asked. references.md: Tsuji with the
+# the textbook (unclamped) damping gives a *larger* `e` than asked. docs/references.md, "Damped Hertz laws": Tsuji with the
 # unclamped `η = −√5 ln e/√(π² + ln² e)` gives 0.808 for a target of 0.8 and 0.550 for 0.5;
 # Kelvin–Voigt with the unclamped `ζ = −ln e/√(π² + ln² e)` gives 0.253/0.550/0.902 for 0.1/0.5/0.9
 # (Schwager & Pöschel 2007). All reproduced: the clamped `e` by simulation (diffrax), the unclamped
@@ -220,7 +220,7 @@ assert np.isclose(calibration.tsuji_eta(0.8) / np.sqrt(5), calibration.kelvin_vo
 # ## 3. Pulse shapes of the same impact (`m* = 1 kg`, `v = 1 m/s`, every law at `e = 0.8`)
 #
 # Checks: the elastic Hertz impact against its closed form (`δ_max = (5m*v²/4k)^{2/5}`,
-# `t_c = 2.94328 δ_max/v`, `F_max = kδ_max^{3/2}`, references.md), and the velocity change
+# `t_c = 2.94328 δ_max/v`, `F_max = kδ_max^{3/2}`, docs/references.md, "Hertz single impact"), and the velocity change
 # `ΔV = (1 + e) v` of every law (momentum).
 #
 # What differs between the laws at the *same* `e`: the linear law starts with a jump `F(0⁺) = c v`
@@ -278,9 +278,9 @@ write_table("contact_restitution_vs_velocity", ["law", "v_mps", "e_simulated", "
              f"{K_LIN!r} N/m), every law calibrated to e = 0.8 at 1 m/s.",
              "e_simulated: hertz_chain.restitution (diffrax, rtol = atol = 1e-11); e_reference: closed form or",
              "scipy calibration (hertz_chain.calibration). v in m/s, e dimensionless. Generated by notebooks/06_contact_laws.py"])
-write_table("chi_map_table", ["map", "target_e", "chi", "e_produced", "error", "e_references_md", "e_simulated"], rows_chi,
+write_table("chi_map_table", ["map", "target_e", "chi", "e_produced", "error", "e_docs_references", "e_simulated"], rows_chi,
             ["Hunt-Crossley maps chi(e) for F = k d^1.5 (1 + chi d'/v0): the exact e each map produces",
-             "(Carvalho & Martins 2019 exact relation); e_references_md: values listed in ../shared/references.md",
+             "(Carvalho & Martins 2019 exact relation); e_docs_references: values listed in docs/references.md, \"Restitution maps\"",
              "(NaN where none); e_simulated: diffrax impact with that chi (NaN where not run). Dimensionless.",
              "Generated by notebooks/06_contact_laws.py"])
 write_table("contact_clamp_calibration", ["law", "target_e", "unclamped_parameter", "e_clamped", "e_unclamped",

@@ -6,7 +6,7 @@ References:
 - Paper Eq 13 (horizontal chain): G_n = prod_{k=2}^n (1+e_k)/(1+r_k).
 - Tsuji et al. (1992): the restitution of the Tsuji law does not depend on the impact speed, so the
   calibrated target e is what every isolated contact must show.
-- Hertz single impact (Johnson 1985, references.md): F_max = k delta_max^{3/2},
+- Hertz single impact (Johnson 1985, docs/references.md): F_max = k delta_max^{3/2},
   delta_max = (5 m v^2/(4k))^{2/5}; an elastic bounce has Delta V = 2 v.
 - Patrício (2004), Am. J. Phys. 72, 1488; Müller & Pöschel (2011): touching stacks fall far short
   of the independent-collision gain.

@@ -90,7 +90,7 @@ def measured_e(law_name, law, m=M, v=V):
 
 
 def test_exact_chi_values():
-    # references.md [num]: exact chi for e = 0.1/0.3/0.5/0.7/0.9 (Carvalho & Martins 2019 relation)
+    # docs/references.md [num]: exact chi for e = 0.1/0.3/0.5/0.7/0.9 (Carvalho & Martins 2019 relation)
     for e, chi in [(0.1, 9.998), (0.3, 3.087), (0.5, 1.433), (0.7, 0.635), (0.9, 0.166)]:
         assert round(cal.chi_from_restitution(e, "exact"), 3) == chi
 
@@ -107,7 +107,7 @@ def test_exact_map_identity_and_lambertw_inverse():
     assert cal.restitution_from_chi(0.99e-4) == pytest.approx(cal.restitution_from_chi(1.01e-4), abs=2e-6)
 
 
-# references.md [num]: e produced by each published map for targets 0.5 and 0.9 (3 decimals)
+# docs/references.md [num]: e produced by each published map for targets 0.5 and 0.9 (3 decimals)
 PUBLISHED_MAP_E = {
     "hunt-crossley": (0.663, 0.909),
     "lankarani-nikravesh": (0.725, 0.913),
@@ -128,7 +128,7 @@ def test_chi_map_table_matches_published():
 
 @pytest.mark.parametrize("name", sorted(PUBLISHED_MAP_E))
 def test_each_map_by_dimensional_integration(name):
-    # the e a map really produces, measured by integrating the HC impact, vs references.md's table
+    # the e a map really produces, measured by integrating the HC impact, vs docs/references.md's table
     for target, published in zip((0.5, 0.9), PUBLISHED_MAP_E[name]):
         law = make_law("hunt-crossley", stiffness=K_HERTZ, restitution=target, calibration_velocity=V,
                        chi_map=name)
@@ -139,7 +139,7 @@ def test_each_map_by_dimensional_integration(name):
 
 def test_zhiying_qishao_map_by_dimensional_integration():
     """No published table gives the e that the Zhiying-Qishao map chi = 3(1 - e^2) exp(2(1 - e))/4
-    (references.md, as quoted by Flores et al. 2011) really produces, so it is checked two independent
+    (docs/references.md, as quoted by Flores et al. 2011) really produces, so it is checked two independent
     ways: the chi from the formula, fed to the exact Lambert-W relation (Carvalho & Martins 2019, tested
     above), against a scipy integration of the Hunt-Crossley impact with that chi."""
     for target in (0.5, 0.9):
@@ -186,7 +186,7 @@ def test_hunt_crossley_restitution_at_velocity():
 
 
 def test_tsuji_unclamped_formula_is_exact():
-    # eta = -sqrt5 ln e / sqrt(pi^2 + ln^2 e) (references.md: exact without the clamp), to 1e-6
+    # eta = -sqrt5 ln e / sqrt(pi^2 + ln^2 e) (docs/references.md: exact without the clamp), to 1e-6
     for e in (0.1, 0.5, 0.8, 0.95):
         eta = -math.sqrt(5) * math.log(e) / math.sqrt(math.pi**2 + math.log(e) ** 2)
         assert cal.tsuji_eta(e, clamp=False) == pytest.approx(eta, rel=1e-15)
@@ -195,7 +195,7 @@ def test_tsuji_unclamped_formula_is_exact():
 
 
 def test_tsuji_unclamped_eta_with_clamp_published():
-    # references.md [num]: the unclamped eta gives e = 0.808 (target 0.8) and 0.550 (0.5) when clamped
+    # docs/references.md [num]: the unclamped eta gives e = 0.808 (target 0.8) and 0.550 (0.5) when clamped
     for target, published in ((0.8, 0.808), (0.5, 0.550)):
         eta = cal.tsuji_eta(target, clamp=False)
         law = make_law("tsuji", stiffness=K_HERTZ, eta=eta, effective_mass=M, clamp=True)
@@ -207,7 +207,7 @@ def test_tsuji_unclamped_eta_with_clamp_published():
 
 def test_kelvin_voigt_clamped_schwager_poschel():
     # Schwager & Pöschel (2007), Granular Matter 9, 465: with the clamp, the unclamped zeta for
-    # e = 0.1/0.5/0.9 gives 0.253/0.550/0.902 (references.md)
+    # e = 0.1/0.5/0.9 gives 0.253/0.550/0.902 (docs/references.md)
     for target, published in ((0.1, 0.253), (0.5, 0.550), (0.9, 0.902)):
         zeta = cal.kelvin_voigt_damping_ratio(target, clamp=False)
         assert round(cal.kelvin_voigt_restitution(zeta, clamp=True), 3) == published

@@ -115,7 +115,7 @@ def test_design_command():
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)
     assert d["mvg"]["n"] == 6  # paper Fig 17: the optimal MVG stack for R = 0.012, e = 0.8 has 6 masses
-    assert d["mvg"]["velocity_gain"] == pytest.approx(5.0407, abs=5e-5)  # references.md, Eq 20
+    assert d["mvg"]["velocity_gain"] == pytest.approx(5.0407, abs=5e-5)  # docs/references.md, Eq 20
     assert d["met"]["n"] == 10  # Figs 16-17: ten-mass MET for R ~ 0.0118
     assert d["met"]["velocity_gain"] == pytest.approx(sum(0.8**k for k in range(1, 11)), rel=1e-12)  # Eq 29
     for kind in ("mvg", "met"):  # K_n = m_n G^2 / M (top kinetic energy / stack kinetic energy)

@@ -45,7 +45,7 @@ def _hertz_impact_scipy(m, k, v):
 
 @pytest.mark.parametrize("m, k, v", [(0.1, 1e9, 1.0), (2.5, 3.7e10, 0.3), (1e-3, 5e7, 7.0)])
 def test_hertz_single_impact_closed_form(m, k, v):
-    # Johnson (1985) Contact Mechanics §11.4; references.md: delta_max = (5 m v^2/(4k))^{2/5},
+    # Johnson (1985) Contact Mechanics §11.4; docs/references.md: delta_max = (5 m v^2/(4k))^{2/5},
     # t_c = 2.94328 delta_max / v, F_max = k delta_max^{3/2}. Checked against scipy to 1e-7 (relative).
     d_max, t_c, f_max, e = _hertz_impact_scipy(m, k, v)
     d_ref = (5 * m * v * v / (4 * k)) ** 0.4
@@ -53,7 +53,7 @@ def test_hertz_single_impact_closed_form(m, k, v):
     # 2.94328 and 3.21807 are printed to 6 digits: half a unit of the last digit is 1.7e-6 relative
     assert t_c == pytest.approx(2.94328 * d_ref / v, rel=1.7e-6)
     assert t_c == pytest.approx(HERTZ_CONTACT_TIME_FACTOR * d_ref / v, rel=1e-7)
-    assert t_c == pytest.approx(3.21807 * (m / k) ** 0.4 * v**-0.2, rel=1.6e-6)  # references.md
+    assert t_c == pytest.approx(3.21807 * (m / k) ** 0.4 * v**-0.2, rel=1.6e-6)  # docs/references.md
     assert f_max == pytest.approx(k * d_ref**1.5, rel=1e-7)
     assert e == pytest.approx(1.0, abs=1e-9)  # elastic
     closed = hertz_impact(m, k, v)
@@ -63,7 +63,7 @@ def test_hertz_single_impact_closed_form(m, k, v):
 
 
 def test_hertz_contact_time_factor_value():
-    # (4/5) B(2/5, 1/2) = 2.943275..., printed as 2.94328 in references.md (Johnson 1985 §11.4).
+    # (4/5) B(2/5, 1/2) = 2.943275..., printed as 2.94328 in docs/references.md (Johnson 1985 §11.4).
     assert HERTZ_CONTACT_TIME_FACTOR == pytest.approx(2.94328, abs=5e-6)
 
 

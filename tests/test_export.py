@@ -35,7 +35,7 @@ print(json.dumps({"v": [float(x).hex() for x in np.asarray(sol.launch_velocities
 
 
 def _run(n: int, tmp: Path, **env) -> dict:
-    full = {**os.environ, "HERTZ_CHAIN_CACHE_DIR": str(tmp / "jax"), "EQX_ON_ERROR": "nan"}
+    full = {**os.environ, "HERTZ_CHAIN_CACHE_DIR": str(tmp), "EQX_ON_ERROR": "nan"}
     full.pop("HERTZ_CHAIN_NO_CACHE", None)
     full.update(env)
     full = {k: v for k, v in full.items() if v is not None}

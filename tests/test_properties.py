@@ -27,7 +27,7 @@ STRUCTURES = [
     (2, "hertz", True), (3, "tsuji", True), (5, "hunt-crossley", True), (8, "kelvin-voigt", True),
     (4, "viscoelastic", True), (6, "hertz", False), (3, "tsuji", False),
 ]
-SETTINGS = settings(max_examples=20, deadline=None, derandomize=True,
+SETTINGS = settings(max_examples=15, deadline=None, derandomize=True,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 
 

@@ -58,7 +58,7 @@ def test_half_sine_uniform():
     assert m.peak_g == pytest.approx(A / 9.80665, rel=1e-12)
     assert m.time_of_peak == pytest.approx(t0 + D / 2, rel=1e-12)
     assert m.duration_10 == pytest.approx(HS_DUR10, rel=1e-7)
-    assert m.duration_10 / D == pytest.approx(0.93623, abs=5e-6)  # the value quoted in references.md
+    assert m.duration_10 / D == pytest.approx(0.93623, abs=5e-6)  # the value quoted in docs/references.md
     assert m.t_start_10 == pytest.approx(t0 + math.asin(0.1) * D / math.pi, rel=1e-7)
     assert m.rise_time == pytest.approx(HS_RISE, rel=1e-7)
     assert m.delta_v == pytest.approx(HS_DV, rel=1e-7)

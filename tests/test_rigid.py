@@ -1,6 +1,6 @@
 """Closed forms of the seed paper (Eqs 1–30) and the MVG/MET designs (hertz_chain.rigid).
 
-Every expected number is named beside it: a paper equation or figure, `shared/references.md`, or an
+Every expected number is named beside it: a paper equation or figure, `docs/references.md`, or an
 independent computation in the test itself (a linear solve of Eqs 1–2, scipy root finding or
 minimisation, direct sums of Eq 25). The misprints of Eqs 8, 23 and 24 are re-derived here, and the
 printed forms are shown to disagree.
@@ -155,7 +155,7 @@ def test_eq19_stack_gain_equals_dropped_cascade_including_active_ground():
 
 
 def test_harter_light_mass_limit():
-    # Harter 1971 (references.md): elastic stack with vanishing mass ratios launches the top at (2^n - 1) v0
+    # Harter 1971 (docs/references.md): elastic stack with vanishing mass ratios launches the top at (2^n - 1) v0
     for n in range(2, 8):
         m = 1e-7 ** np.arange(n)
         assert rigid.stack_gain(m, 1.0) == pytest.approx(2**n - 1, rel=1e-5)
@@ -178,7 +178,7 @@ def test_mvg_power_law_is_optimal_for_fixed_n_and_R():
 
 def test_fig17_optimal_mvg_for_R_0012():
     # Fig 17: R = 0.012, e = 0.8 -> the optimal MVG stack has 6 masses;
-    # references.md: G(MVG, n = 6) = 5.0407 (Eq 20)
+    # docs/references.md: G(MVG, n = 6) = 5.0407 (Eq 20)
     assert rigid.mvg_optimal_n(0.012, 0.8) == 6
     assert rigid.mvg_optimal_n_pb(0.012, 0.8) == 6
     assert rigid.mvg_gain(0.012, 0.8, 6) == pytest.approx(5.0407, abs=1e-4)
@@ -300,7 +300,7 @@ def test_met_definition_leaves_all_but_top_at_rest():
 
 
 def test_met_gain_eq29_eq30():
-    # Eq 29: ten-mass MET at e = 0.8: sum_{k=1}^{10} 0.8^k = 3.5705 (references.md)
+    # Eq 29: ten-mass MET at e = 0.8: sum_{k=1}^{10} 0.8^k = 3.5705 (docs/references.md)
     assert rigid.met_gain(0.8, 10) == pytest.approx(3.5705, abs=1e-4)
     assert rigid.met_gain(0.8, 10) == pytest.approx(sum(0.8**k for k in range(1, 11)), rel=1e-14)
     np.testing.assert_array_equal(rigid.met_gain(1.0, np.arange(2, 12)), np.arange(2, 12))  # G_n = n
@@ -348,12 +348,12 @@ def test_design_R_0012_e_08():
     d = rigid.design(R=0.012, e=0.8)
     assert d.mvg.kind == "MVG" and d.mvg.n == 6  # Fig 17
     assert d.met.kind == "MET" and d.met.n == 10  # Figs 16-17
-    assert d.mvg.gain == pytest.approx(5.0407, abs=1e-4)  # references.md
-    assert d.met.gain == pytest.approx(3.5705, abs=1e-4)  # references.md, Eq 29
+    assert d.mvg.gain == pytest.approx(5.0407, abs=1e-4)  # docs/references.md
+    assert d.met.gain == pytest.approx(3.5705, abs=1e-4)  # docs/references.md, Eq 29
     assert d.mvg.masses[-1] == pytest.approx(0.012, rel=1e-13)
     np.testing.assert_allclose(np.prod(d.met.ratios), np.prod(_met_ratios_eq25(0.8, 10)), rtol=1e-13)
     assert d.gain_ratio == pytest.approx(5.0407 / 3.5705, rel=1e-4)
-    # Section 5 says MET's gain is "about 23%" lower; with Eqs 20 and 29 it is 29% lower (references.md)
+    # Section 5 says MET's gain is "about 23%" lower; with Eqs 20 and 29 it is 29% lower (docs/references.md)
     assert 1 - d.met.gain / d.mvg.gain == pytest.approx(0.2917, abs=5e-4)
     # Section 5: "the total mass in both the MET and the six-mass MVG systems is about the same"
     assert d.mass_ratio == pytest.approx(1.0, abs=0.05)

@@ -68,7 +68,7 @@ def test_sequential_single_collisions_equal_eq13_and_eq19():
 
 
 def test_paper_mvg6_and_met10_designs():
-    # Fig 17 / Eq 20: the optimal MVG stack (R = 0.012, e = 0.8, n = 6) gains 5.0407 (references.md);
+    # Fig 17 / Eq 20: the optimal MVG stack (R = 0.012, e = 0.8, n = 6) gains 5.0407 (docs/references.md);
     # Eq 29: the ten-mass MET stack gains sum 0.8^k = 3.5705 and leaves the lower masses at rest.
     m = rigid.mvg_masses(0.012, 6, 8.4)
     r = simulate_rigid(m, -np.ones(6), np.r_[0.0, np.full(5, 1e-2)], 0.8, ground_restitution=0.8)

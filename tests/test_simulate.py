@@ -24,7 +24,7 @@ G = STANDARD_GRAVITY
 TIGHT = Tolerances(rtol=1e-11, atol=1e-11)
 
 # Hertz impact constant: t_c = (4/5) B(2/5, 1/2) delta_max / v = 2.9432752 delta_max / v (closed form of
-# t_c = 2 int_0^dmax d(delta)/sqrt(v^2 - 4 k delta^{5/2}/(5 m)); references.md quotes 2.94328).
+# t_c = 2 int_0^dmax d(delta)/sqrt(v^2 - 4 k delta^{5/2}/(5 m)); docs/references.md quotes 2.94328).
 HERTZ_TC = 0.8 * beta(0.4, 0.5)
 
 
@@ -49,7 +49,7 @@ def test_unclamped_contact_ends_when_overlap_closes(e):
     # Without the no-tension clamp the contact pulls until delta = 0, so the measured restitution is
     # the law's exact unclamped map. Linear spring-dashpot: e = exp(-zeta pi / sqrt(1 - zeta^2)),
     # contact time pi / (omega_n sqrt(1 - zeta^2)) (damped half period); Tsuji: the same in rescaled
-    # time with zeta = eta / sqrt(5) (references.md: exact without the clamp).
+    # time with zeta = eta / sqrt(5) (docs/references.md: exact without the clamp).
     m, k, v = 0.2, 3e6, 1.3
     zeta = -np.log(e) / np.sqrt(np.pi**2 + np.log(e) ** 2)
     kv = restitution(KelvinVoigt(k, 2 * zeta * np.sqrt(m * k), clamp=False), v, m)
@@ -58,7 +58,7 @@ def test_unclamped_contact_ends_when_overlap_closes(e):
     eta = -np.sqrt(5) * np.log(e) / np.sqrt(np.pi**2 + np.log(e) ** 2)
     ts = restitution(Tsuji(3e9, eta, m, clamp=False), v, m)
     assert ts.e == pytest.approx(e, abs=1e-7)
-    # with the clamp the same eta dissipates less (references.md: 0.808 for a 0.8 target)
+    # with the clamp the same eta dissipates less (docs/references.md: 0.808 for a 0.8 target)
     if e == 0.8:
         assert restitution(Tsuji(3e9, eta, m), v, m).e == pytest.approx(0.808, abs=5e-4)
 

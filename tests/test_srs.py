@@ -9,7 +9,7 @@ Independent references:
   `peak='abs'`, `rolloff='none'`, `time='primary'|'residual'|'total'`);
 * closed forms: the impulse-response limit at low frequency, the quasi-static limit at high frequency
   (`H(s) = 1 − s²/ω² + O(s³)`), and the published half-sine value (≈ 1.65 A near `f_n D ≈ 0.83`,
-  references.md).
+  docs/references.md).
 """
 
 from __future__ import annotations
@@ -207,7 +207,7 @@ def test_high_frequency_asymptote(fD):
 
 
 def test_half_sine_published_peak():
-    """Half-sine, Q = 10: the SRS peaks at ≈ 1.65 A near f_n D ≈ 0.83 (references.md, 'Shock pulses');
+    """Half-sine, Q = 10: the SRS peaks at ≈ 1.65 A near f_n D ≈ 0.83 (docs/references.md, 'Shock pulses');
     published to two digits, checked to ±0.01 A and ±0.02 in f_n D."""
     fs = 1.0e6
     _, a = half_sine_samples(fs)

@@ -1,0 +1,174 @@
+"""The vocabularies of hertz_chain, one table each: contact laws (`LAWS`), Hunt–Crossley restitution
+maps (`CHI_MAPS`) and ODE solvers (`SOLVERS`), in the manner of scipy's `solve_ivp` `METHODS`.
+
+Every entry point reads these tables: `contact.make_law`, the stack-file parser (`stackfile`), the
+builder (`build`), the calibration (`calibration.CHI_MAPS`), `simulate.make_solver`, and the tests,
+which run every row end to end (`tests/test_registry.py`). Adding a contact law is one class in
+`hertz_chain.contact` (with a `from_config` classmethod) and one row here; adding a solver or a map is
+one row.
+
+Plain Python (no JAX, no numpy): the command line reads it while checking a stack file, before anything
+heavy is imported.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Callable
+
+__all__ = ["LawRow", "LAWS", "ChiMapRow", "CHI_MAPS", "SolverRow", "SOLVERS"]
+
+
+# ==================================================================== contact laws
+@dataclass(frozen=True)
+class LawRow:
+    """One contact law.
+
+    - `name`: its configuration name (stack files, `make_law`); `cls`: its class in
+      `hertz_chain.contact`, whose `from_config` builds it.
+    - `stiffness`: the dimension of its `stiffness` (`"hertz_stiffness"`, N/m^1.5, for the Hertzian
+      laws, whose stiffness can also come from materials and radii; `"linear_stiffness"`, N/m).
+    - `damping`: the stack-file key of its own damping parameter (`None` for an elastic law), its
+      dimension (a `stackfile` dimension name), its largest value, and how messages describe it;
+      `aliases`: the other keywords `make_law` accepts for it.
+    - `speed_dependent`: its restitution changes with the impact speed, so calibrating it to a
+      restitution needs a `calibration_velocity`; `needs_effective_mass`: calibrating it (or the law
+      itself) needs the interface's effective mass; `chi_map`: it takes a `CHI_MAPS` entry.
+    """
+
+    name: str
+    cls: str
+    stiffness: str = "hertz_stiffness"
+    damping: str | None = None
+    damping_dimension: str | None = None
+    damping_max: float | None = None
+    damping_label: str = ""
+    aliases: tuple[str, ...] = ()
+    speed_dependent: bool = False
+    needs_effective_mass: bool = False
+    chi_map: bool = False
+
+    @property
+    def hertzian(self) -> bool:
+        """Its stiffness is a Hertz stiffness (N/m^1.5), computable from materials and radii."""
+        return self.stiffness == "hertz_stiffness"
+
+    @property
+    def elastic(self) -> bool:
+        return self.damping is None
+
+    @property
+    def keywords(self) -> tuple[str, ...]:
+        """Every keyword of its damping parameter (`make_law`)."""
+        return () if self.damping is None else self.aliases + (self.damping,)
+
+    def file_keys(self) -> frozenset[str]:
+        """The keys a stack-file contact section with this law may hold (besides `law`)."""
+        keys = {"stiffness", "clamp"}
+        if not self.elastic:
+            keys |= {"restitution", self.damping}
+        if self.chi_map:
+            keys.add("chi_map")
+        if self.speed_dependent:
+            keys.add("calibration_velocity")
+        return frozenset(keys)
+
+    def hint(self) -> str:
+        """What it takes, for error messages."""
+        if self.elastic:
+            return f"the {self.name!r} law is elastic (no damping)"
+        extra = " with chi_map" if self.chi_map else (" (with calibration_velocity)" if self.speed_dependent else "")
+        return f"{self.name!r} takes restitution{extra} or {self.damping} ({self.damping_label})"
+
+
+LAWS: dict[str, LawRow] = {row.name: row for row in (
+    LawRow("hertz", "Hertz"),
+    LawRow("hunt-crossley", "HuntCrossley", damping="alpha", damping_dimension="inverse_velocity",
+           damping_max=1e6, damping_label="alpha, s/m", speed_dependent=True, chi_map=True),
+    LawRow("tsuji", "Tsuji", damping="damping", damping_dimension="dimensionless", damping_max=1e6,
+           damping_label="eta", aliases=("eta",), needs_effective_mass=True),
+    LawRow("kelvin-voigt", "KelvinVoigt", stiffness="linear_stiffness", damping="damping",
+           damping_dimension="viscous_damping", damping_max=1e9, damping_label="c, N s/m",
+           needs_effective_mass=True),
+    LawRow("viscoelastic", "Viscoelastic", damping="damping", damping_dimension="time", damping_max=1.0,
+           damping_label="A, s", aliases=("A",), speed_dependent=True, needs_effective_mass=True),
+)}
+"""Contact laws by configuration name (see `LawRow`)."""
+
+
+# ==================================================================== Hunt–Crossley chi maps
+@dataclass(frozen=True)
+class ChiMapRow:
+    """A map `e -> chi` for `F = k delta^{3/2} (1 + chi delta_dot / v_0)`: `formula` (plain Python;
+    `None` for the exact map, which `hertz_chain.calibration` inverts numerically) and its `source`."""
+
+    name: str
+    formula: Callable[[float], float] | None
+    source: str
+
+
+CHI_MAPS: dict[str, ChiMapRow] = {row.name: row for row in (
+    ChiMapRow("hunt-crossley", lambda e: 1.5 * (1.0 - e), "Hunt & Crossley (1975), J. Appl. Mech. 42, 440"),
+    ChiMapRow("herbert-mcwhannell", lambda e: 6.0 * (1.0 - e) / ((2.0 * e - 1.0) ** 2 + 3.0),
+              "Herbert & McWhannell (1977), J. Eng. Ind. 99, 513"),
+    ChiMapRow("lee-wang", lambda e: 0.75 * (1.0 - e), "Lee & Wang (1983), J. Mech. Transm. Autom. Des. 105, 534"),
+    ChiMapRow("lankarani-nikravesh", lambda e: 0.75 * (1.0 - e * e),
+              "Lankarani & Nikravesh (1990), J. Mech. Des. 112, 369"),
+    ChiMapRow("gonthier", lambda e: (1.0 - e * e) / e,
+              "Gonthier, McPhee, Lange & Piedboeuf (2004), Multibody Syst. Dyn. 11, 209"),
+    ChiMapRow("zhiying-qishao", lambda e: 0.75 * (1.0 - e * e) * math.exp(2.0 * (1.0 - e)),
+              "Zhiying & Qishao (2006), Acta Mech. Sin. 22, 79 (as quoted by Flores et al. 2011)"),
+    ChiMapRow("flores", lambda e: 8.0 * (1.0 - e) / (5.0 * e),
+              "Flores, Machado, Silva & Martins (2011), Multibody Syst. Dyn. 25, 357"),
+    ChiMapRow("hu-guo", lambda e: 1.5 * (1.0 - e) / e,
+              "Hu & Guo (2015), Multibody Syst. Dyn. 35, 131 (the 3(1-e)/(2e) form)"),
+    ChiMapRow("exact", None, "Carvalho & Martins (2019), Mech. Mach. Theory 139, 1: exact for F = K d^p (1 + chi d'/v0)"),
+)}
+"""Hunt–Crossley restitution maps by configuration name (see `ChiMapRow`)."""
+
+
+# ==================================================================== solvers
+def _diffrax(name: str) -> Callable[[Any], Any]:
+    def make(tolerances):
+        import diffrax
+
+        return getattr(diffrax, name)()
+
+    return make
+
+
+def _unrolled_tsit5(tolerances):
+    from .simulate import UnrolledTsit5
+
+    return UnrolledTsit5()
+
+
+def _kvaerno5_chord(tolerances):
+    # Chord iterations (Jacobian frozen per step) stopped on a proper Cauchy test at a tenth of the
+    # step controller's tolerances (measured best among Chord/Newton at 1e-2, 1e-1, 1 x tol).
+    import diffrax
+    import optimistix
+
+    rf = optimistix.Chord(rtol=tolerances.rtol * 1e-1, atol=tolerances.atol * 1e-1)
+    return diffrax.Kvaerno5(root_finder=rf, root_find_max_steps=10)
+
+
+@dataclass(frozen=True)
+class SolverRow:
+    """An ODE solver: `make(tolerances)` returns the diffrax solver (it imports JAX only when called)."""
+
+    name: str
+    make: Callable[[Any], Any]
+    description: str
+
+
+SOLVERS: dict[str, SolverRow] = {row.name: row for row in (
+    SolverRow("tsit5", _unrolled_tsit5, "Tsitouras 5(4) with its stages written out (the default)"),
+    SolverRow("tsit5-diffrax", _diffrax("Tsit5"), "diffrax's Tsit5: the same method, its stages in a loop"),
+    SolverRow("dopri5", _diffrax("Dopri5"), "Dormand–Prince 5(4)"),
+    SolverRow("dopri8", _diffrax("Dopri8"), "Dormand–Prince 8(7)"),
+    SolverRow("kvaerno5", _kvaerno5_chord, "Kvaerno5, implicit, with a Chord iteration that terminates properly"),
+    SolverRow("kvaerno5-stock", _diffrax("Kvaerno5"), "diffrax 0.7.2's Kvaerno5 as shipped (VeryChord)"),
+)}
+"""ODE solvers by name (see `SolverRow`)."""
