@@ -76,14 +76,14 @@ rtol = 1e-10
 | `law` | `"hertz"`, `"hunt-crossley"`, `"tsuji"`, `"kelvin-voigt"`, `"viscoelastic"` | required in `[contact]` |
 | `stiffness` | N/m^1.5 (Hertzian laws) or N/m (`kelvin-voigt`), > 0 | from materials and geometry |
 | `restitution` | e ∈ [0.001, 1] (ground too: a contact law is passive) | one of restitution / alpha / damping |
-| `chi_map` | `hunt-crossley` only: `"hunt-crossley"`, `"herbert-mcwhannell"`, `"lankarani-nikravesh"`, `"gonthier"`, `"flores"`, `"hu-guo"`, `"zhiying-qishao"`, `"exact"` | `"exact"` |
+| `chi_map` | `hunt-crossley` only: `"hunt-crossley"`, `"herbert-mcwhannell"`, `"lee-wang"`, `"lankarani-nikravesh"`, `"gonthier"`, `"zhiying-qishao"`, `"flores"`, `"hu-guo"`, `"exact"` (`registry.CHI_MAPS`) | `"exact"` |
 | `calibration_velocity` | velocity > 0 (`hunt-crossley`, `viscoelastic` with restitution) | builder's choice (see below) |
 | `alpha` | s/m ≥ 0 (`hunt-crossley`) | none |
 | `damping` | ≥ 0: `tsuji` η ≤ 1e6 (plain number), `kelvin-voigt` c ≤ 1e9 N s/m, `viscoelastic` A ≤ 1 s | none |
 | `clamp` | bool: force clamped at F ≥ 0 | `true` |
 | `index` | `[[contact.interface]]` only: interface number j ∈ [1, n−1], or a list | required |
 | **`[solver]`** | | |
-| `solver` | `"tsit5"`, `"dopri8"`, `"kvaerno5"` | `"tsit5"` |
+| `solver` | `"tsit5"`, `"tsit5-diffrax"`, `"dopri5"`, `"dopri8"`, `"kvaerno5"`, `"kvaerno5-stock"` (`registry.SOLVERS`) | `"tsit5"` |
 | `rtol`, `atol` | numbers in (0, 1) and > 0 | simulator's default |
 | `t_max` | time > 0, ≤ 1e4 s | simulator's default (from the physics: covers the cascade) |
 | `until` | `"cascade"` or `"t_max"` | `"cascade"`: stop when the first cascade ends; `"t_max"` (needs `t_max`) goes on and reports later impacts as rebounds |

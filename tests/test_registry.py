@@ -16,6 +16,10 @@ from hertz_chain.rigid_events import simulate_rigid
 
 
 def test_every_entry_point_reads_the_registry():
+    # ... and the stack-file manual lists every name
+    manual = stackfile.__doc__
+    for name in (*registry.LAWS, *registry.CHI_MAPS, *registry.SOLVERS):
+        assert f'"{name}"' in manual, name
     assert stackfile.CONTACT_LAWS == tuple(registry.LAWS) == contact.LAW_NAMES
     assert stackfile.CHI_MAPS == tuple(registry.CHI_MAPS) == tuple(calibration.CHI_MAPS)
     assert stackfile.SOLVERS == tuple(registry.SOLVERS)
