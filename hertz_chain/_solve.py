@@ -1,0 +1,248 @@
+"""The compiled solve behind `hertz_chain.simulate`: the scaled vector field, the one call to
+`diffrax.diffeqsolve`, its outputs, the step history's post-processing, and the batched and sharded
+solves."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+
+import diffrax as dfx
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from . import _config  # noqa: F401  (float64)
+from ._export import cached_jit
+from ._scaling import Scales, _default_t_max, _scales
+from ._solver import _Config
+from ._tracking import _cascade_complete, _end_of_contacts, _launch, _Tracked
+from .stack import Stack, State
+from .status import Status
+
+def _scaled_field(t, ys, args):
+    """The scaled vector field of the solver's state `[x, v, D (3n) | z (n, with resolve_onsets) | over]`.
+
+    `over` (the last entry) is no variable of the motion: its derivative is zero, and `_Tracked` writes
+    the cascade-over flag of `_cascade_over` into it after every step, so that the stopping event reads
+    one number instead of evaluating the rule again. A state of exactly `3n` entries (the replayed
+    adjoint's physical part) gets the `3n` physical derivatives."""
+    stack, scale, T = args[:3]
+    n3 = scale.shape[0]
+    y = ys[:n3] * scale
+    dy = T * stack.vector_field(t * T, y) / scale
+    if ys.shape[0] == n3:
+        return dy
+    parts = [dy]
+    if ys.shape[0] > n3 + 1:
+        # onset proxy: z_j' = sqrt(delta_j+ / L), whose local error is O(h^1.5) at a contact onset, so the
+        # step controller resolves every onset (the kink of F ~ delta^{3/2}) to the tolerance
+        d = stack.overlaps(stack.split(y)[0]) / scale[0]
+        parts.append(jnp.sqrt(jnp.where(d > 0, d, 0.0) + 1e-300) * stack.interface_mask())
+    return jnp.concatenate(parts + [jnp.zeros(1, dy.dtype)])
+
+
+def _derived(stack: Stack, y):
+    """Physical quantities of SI states `(..., 3n)`."""
+    x, v, diss = stack.split(y)
+    d, dd = stack.overlaps(x), stack.overlap_rates(v)
+    f = stack.forces(d, dd)
+    return dict(
+        positions=x, velocities=v, accelerations=stack.accelerations(f), overlaps=d,
+        overlap_rates=dd, forces=f, dissipated=diss, energy=stack.total_energy(y),
+    )
+
+
+def _setup(stack: Stack, state: State, t_max, cfg: _Config):
+    """Scales, the scaled initial state and the scaled end time of a solve."""
+    n = stack.n
+    sc = _scales(stack, state)
+    scale = sc.vector(n)
+    y0 = state.flat()
+    t1 = jnp.where(jnp.isnan(t_max), _default_t_max(stack, state, sc), t_max)
+    proxies = jnp.zeros(n if cfg.tolerances.resolve_onsets else 0)
+    y0s = jnp.concatenate([y0 / scale, proxies, jnp.zeros(1)])  # `_scaled_field`: [x v D | z | over]
+    return sc, scale, y0s, t1 / sc.time
+
+
+def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _Config, history: bool, audit: bool):
+    """The one call to `diffrax.diffeqsolve` (scaled state and time). Saves, in `sol.ys`/`sol.ts` in
+    this order: the accepted steps with `t0` (if `history`), the times `ts_s` (if given), `t1`."""
+    subs = []
+    if history:
+        subs.append(dfx.SubSaveAt(t0=True, steps=True))
+    if ts_s is not None:
+        subs.append(dfx.SubSaveAt(ts=ts_s))
+    subs.append(dfx.SubSaveAt(t1=True))
+    return dfx.diffeqsolve(
+        dfx.ODETerm(_scaled_field),
+        _Tracked.around(cfg.solver, cfg.adjoint, audit=audit),
+        t0=0.0,
+        t1=t1s,
+        dt0=cfg.tolerances.first_step,
+        y0=y0s,
+        args=(stack, scale, T, y0s[stack.n : 2 * stack.n]),
+        saveat=dfx.SaveAt(subs=subs, solver_state=True),
+        stepsize_controller=cfg.tolerances.controller(),
+        event=dfx.Event(_cascade_complete) if cfg.until == "cascade" else None,
+        max_steps=cfg.max_steps,
+        adjoint=cfg.adjoint,
+        throw=False,
+    )
+
+
+def _core(sol) -> dict:
+    """What every solve reports: final scaled time and state, the contacts' bookkeeping, status, steps.
+
+    The status (`hertz_chain.status.Status`): the event (the cascade is over) or, with `until="t_max"`,
+    an accepted point where it was over: complete (with rebounds if a contact closed after it); else
+    `t_max` or `max_steps` first: incomplete, or no contact if nothing ever touched; a non-finite state
+    is checked in `_outputs`."""
+    c = sol.solver_state[1]
+    over, rebounds = c.cascade[0] > 0, c.cascade[1] > 0
+    touched = jnp.any(c.rows[:, 0] >= 0)
+    done = jnp.where(rebounds, Status.COMPLETE_WITH_REBOUNDS, Status.COMPLETE)
+    status = jnp.where(
+        (sol.result == dfx.RESULTS.event_occurred) | over, done,
+        jnp.where(sol.result == dfx.RESULTS.successful,
+                  jnp.where(touched, Status.INCOMPLETE_T_MAX, Status.NO_CONTACT),
+                  jnp.where(sol.result == dfx.RESULTS.max_steps_reached, Status.INCOMPLETE_MAX_STEPS,
+                            Status.FAILED)),
+    )
+    return dict(t_fin=sol.ts[-1][-1], y_fin=sol.ys[-1][-1], contacts=c, status=status,
+                num_steps=sol.stats["num_steps"], num_accepted_steps=sol.stats["num_accepted_steps"],
+                num_rejected_steps=sol.stats["num_rejected_steps"])
+
+
+def _outputs(stack: Stack, sc: Scales, scale, core: dict, until: str = "cascade") -> dict:
+    """Launch data (in SI) from a solve's `_core` (`_end_of_contacts`, `_launch`). A mass still pushed
+    when the cascade ended (mass 1 resting on the ground) is given its velocity then: the final state
+    of a solve stopped by the event (`until="cascade"`; it carries the reverse-mode cotangent), the
+    velocities kept in `_Contacts.cascade` otherwise."""
+    n, n3 = stack.n, 3 * stack.n
+    t_fin = core["t_fin"] * sc.time
+    y_fin = core["y_fin"][:n3] * scale
+    v_fin = stack.split(y_fin)[1]
+    c = core["contacts"]
+    over = c.cascade[0] > 0
+    t_c, v_c = t_fin, v_fin
+    if until != "cascade":
+        t_c = jnp.where(over, c.cascade[2] * sc.time, t_fin)
+        v_c = jnp.where(over, c.cascade[5:] * scale[n : 2 * n], v_fin)
+    t_end_if = _end_of_contacts(stack, c, sc.time, t_c)
+    t_end, v_launch = _launch(stack, c, sc.time, t_end_if, t_c, v_c)
+    status = core["status"]
+    status = jnp.where(jnp.all(jnp.isfinite(y_fin)) | (status == Status.INCOMPLETE_MAX_STEPS), status,
+                       Status.FAILED)
+    return dict(
+        status=status,
+        t_final=t_fin,
+        cascade_end_time=jnp.where(over, c.cascade[2] * sc.time, jnp.nan),
+        launch_velocities=v_launch,
+        launch_times=t_end,
+        contact_end_times=t_end_if,
+        final_velocities=v_fin,
+        num_steps=core["num_steps"],
+        num_accepted_steps=core["num_accepted_steps"],
+        num_rejected_steps=core["num_rejected_steps"],
+    )
+
+
+def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, full: bool = True):
+    n3 = 3 * stack.n
+    sc, scale, y0s, t1s = _setup(stack, state, t_max, cfg)
+    sol = _diffeqsolve(stack, y0s, t1s, scale, sc.time, None if ts is None else ts / sc.time, cfg,
+                       history=cfg.save_steps, audit=full and not cfg.save_steps)
+    contacts = sol.solver_state[1]
+    out = _outputs(stack, sc, scale, _core(sol), cfg.until)
+    if not full:
+        return out
+    out["scales"] = sc
+    if cfg.save_steps:  # derived quantities and the energy audit: `_history`, on the rows actually used
+        out["history"] = (sol.ys[0][:, :n3], sol.ts[0])
+    else:
+        out["energy_error"] = contacts.energy[1] / sc.energy
+    if ts is not None:
+        grid = _derived(stack, sol.ys[int(cfg.save_steps)][:, :n3] * scale)
+        grid["t"] = ts
+        out["grid"] = grid
+    return out
+
+
+def _solve_plain(stack: Stack, state: State, ts, t_max, cfg: _Config) -> dict:
+    """`_solve_impl` with `Scales` as a dict: only dicts, tuples and arrays, which `jax.export` can keep."""
+    out = dict(_solve_impl(stack, state, ts, t_max, cfg))
+    out["scales"] = {f.name: getattr(out["scales"], f.name) for f in dataclasses.fields(Scales)}
+    return out
+
+
+# a traced solve is kept on disk where that is exact (`_export`: under EQX_ON_ERROR=nan, the CLI's setting)
+_solve = cached_jit(_solve_plain, eqx.filter_jit(_solve_plain), "simulate._solve")
+
+
+def _history_impl(stack: Stack, history, sc: Scales, rows: int):
+    """Physical quantities and the energy audit of the first `rows` points of a saved step history
+    (scaled; points after the solve's end are inf)."""
+    ys, ts = history
+    steps = _derived(stack, ys[:rows] * sc.vector(stack.n))
+    steps["t"] = ts[:rows] * sc.time
+    err = jnp.where(jnp.isfinite(steps["t"]), jnp.abs(steps["energy"] - steps["energy"][0]), 0.0)
+    return steps, jnp.max(err) / sc.energy
+
+
+# `rows` (a Python int) is static: one compilation per bucket of `_history_rows`
+_history = eqx.filter_jit(_history_impl)
+_history_batch = eqx.filter_jit(eqx.filter_vmap(_history_impl, in_axes=(eqx.if_array(0), 0, 0, None)))
+
+
+def _history_rows(points: int, buffer: int) -> int:
+    """Rows of a step history to post-process: the `points` saved (accepted steps + 1) rounded up to a
+    power of two (at least 64), at most the buffer's `max_steps + 1`. Deriving forces, energies, ... on
+    the whole buffer made `simulate` cost grow with `max_steps` rather than with the steps taken
+    (benchmarks, 10 masses, ~1400 steps: 21 ms at the default 65,536; the solve itself is 7 ms); the
+    power of two bounds the number of compilations (about a dozen lengths) while wasting at most half."""
+    return int(min(buffer, max(64, 1 << max(points - 1, 0).bit_length())))
+
+
+def _post_history(out: dict, stack: Stack, batched: bool) -> dict:
+    """Replace `out["history"]` by `out["steps"]` and `out["energy_error"]` (see `_history_rows`)."""
+    if "history" not in out:
+        return out
+    out = dict(out)
+    history = out.pop("history")
+    rows = _history_rows(int(np.max(np.asarray(out["num_accepted_steps"]))) + 1, history[1].shape[-1])
+    fn = _history_batch if batched else _history
+    out["steps"], out["energy_error"] = fn(stack, history, out["scales"], rows)
+    return out
+
+
+def _solve_full(stack, state, ts, t_max, cfg):
+    return _solve_impl(stack, state, ts, t_max, cfg)
+
+
+_vmapped = eqx.filter_vmap(_solve_full, in_axes=(eqx.if_array(0), eqx.if_array(0), None, eqx.if_array(0), None))
+_solve_batch = eqx.filter_jit(_vmapped)
+
+
+@functools.cache
+def _solve_sharded(ndev: int):
+    """`_solve_batch` split over the first `ndev` local devices (`jax.shard_map`): every device runs the
+    vmapped solve of its share of the designs, with its own loop, so a design waits only for the slowest
+    design of its own share. On a CPU, `_config.expose_cpu_cores` makes every core a device."""
+    mesh = jax.sharding.Mesh(np.asarray(jax.local_devices()[:ndev]), ("design",))
+    split, same = jax.sharding.PartitionSpec("design"), jax.sharding.PartitionSpec()
+
+    @eqx.filter_jit
+    def run(stacks, states, ts, t_max, cfg):
+        dyn, static = eqx.partition((stacks, states, t_max), eqx.is_array)
+        shared, shared_static = eqx.partition((ts, cfg), eqx.is_array)
+
+        def local(dyn, shared):
+            s, x, tm = eqx.combine(dyn, static)
+            ts_, cfg_ = eqx.combine(shared, shared_static)
+            return _vmapped(s, x, ts_, tm, cfg_)
+
+        return jax.shard_map(local, mesh=mesh, in_specs=(split, same), out_specs=split, check_vma=False)(dyn, shared)
+
+    return run

@@ -1,0 +1,271 @@
+"""Contact tracking inside the solver loop: the end of the first cascade (`_cascade_over`), the
+per-interface bookkeeping of the accepted steps (`_Contacts`, carried by the `_Tracked` wrapper), and
+the launch velocities located from it (`_end_of_contacts`, `_launch`). See the `hertz_chain.simulate`
+module docstring, "Stopping" and "Launch velocities"."""
+
+from __future__ import annotations
+
+import diffrax as dfx
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array
+
+from . import _config  # noqa: F401  (float64)
+from .stack import Stack
+
+#: A scaled velocity that differs from free flight by more than this has felt a contact.
+_TOUCHED = 1e-9
+#: A free group of masses whose internal energy is below this fraction of its drop energy has settled
+#: (`_cascade_over`): a slow inelastic collapse of the lower masses (e.g. a gapped MET stack without
+#: gravity) no longer holds the run; their velocities can still change by at most ~1e-3 V.
+_SETTLED = 1e-6
+#: A touching interface (overlap above `-sqrt(_QUIET) L`) whose relative kinetic plus elastic energy is
+#: below this fraction of `m* V^2/2` is quiet: its two masses move as one body (a settled clump), and at
+#: most `sqrt(_QUIET) V` = 1e-6 V of velocity is left to exchange.
+_QUIET = 1e-12
+
+
+def _cascade_over(t, ys, args, x, v, d, dd, closed):
+    """The first cascade is over (issue 16's rule; README, "The launch, the cascade and the statuses"):
+    something has touched, and for some `k` (0..n) the masses `1..k` rest on the ground while everything
+    above flies apart: every contact above mass `k` is open and no neighbours there approach (their
+    relative velocity stays constant under a common gravity, so they never meet again) or is quiet
+    (`_QUIET`: two masses that have settled into moving as one body), and
+
+    - `k = 0`: mass 1 is off the ground, or leaving it (`v_1 >= 0`);
+    - `k >= 1`: the masses `1..k` are bound to the ground: `sum_{i<=k} (m_i v_i^2/2 + m_i g x_i) +
+      sum_{j<k} P_j(delta_j) < 0`, below the energy of resting unloaded at `x = 0`. With the contact above
+      them open nothing adds energy to them (the ground does no work), so none of them can rise above
+      the depth of the static contact wells: they settle, and their contacts among themselves are
+      landings again (rebounds), never a push that reaches the masses flying apart above.
+
+    or (with mass 1 off the ground, or without a ground) a group of masses `1..k` flying freely has
+    settled (without gravity: its internal energy `E_int`, kinetic in its centre-of-mass frame plus its
+    inner contacts' elastic energy, is below `_SETTLED` of its drop energy `M_k V^2/2`; under gravity
+    the group falls back to the ground, a rebound, so its masses never get final velocities) and can
+    never push mass `k+1` again: mass `k+1` moves away from the group's centre of mass faster than any
+    velocity `E_int` could give the group's top mass, `sqrt(2 E_int (M_k - m_k)/(M_k m_k))`. Every mass above the group then
+    has its final launch; the masses of a settled or bound group report their velocities at the end of
+    the cascade (without gravity within `sqrt(_SETTLED) V` of any later value).
+
+    `args = (stack, scale, T, v0s)`, `v0s` the scaled initial velocities (contact has happened once a
+    velocity departs from free flight); `x`, `v` (SI), the overlaps `d`, their rates `dd` and the closed
+    contacts `closed` of the state `ys`, which the caller (`_Contacts.update`) has at hand."""
+    stack, scale, T, v0s = args
+    n = stack.n
+    mask = stack.interface_mask()
+    free_fall = v0s - stack.gravity * T * t / scale[n]
+    touched = jnp.any(jnp.abs(ys[n : 2 * n] - free_fall) > _TOUCHED)
+    # per interface: open and not approaching, or quiet (its relative kinetic and elastic energy below
+    # `_QUIET` of its drop energy: a clump of masses moving as one body), or absent
+    mu, m, pot = stack.effective_masses(), stack.masses, stack.potentials(d)
+    touching = d > -jnp.sqrt(_QUIET) * scale[0]  # in contact, or within 1e-6 of the length scale
+    quiet = touching & (0.5 * mu * dd**2 + pot <= _QUIET * 0.5 * mu * scale[n] ** 2)
+    # Between two free masses (and mass 1 and the ground) an approach slower than sqrt(_QUIET) V is
+    # round-off dust; the contact just above a group bound to the ground must not approach at all
+    # (its lower mass is held, so a mass falling onto it speeds up: that landing is still to come).
+    dust = jnp.sqrt(_QUIET) * scale[n]
+    apart = (~closed & (dd <= dust)) | quiet | ~mask
+    strict = (~closed & (dd <= 0)) | quiet | ~mask
+    # tail[k], k = 0..n: every interface j >= k + 1 is apart (vacuous for k >= n - 1)
+    tail = jnp.concatenate([jnp.flip(jnp.cumprod(jnp.flip(apart[1:]))) > 0, jnp.ones(2, bool)])
+    # A free group, masses 1..k (k = 1..n-1) off the ground: its internal energy (kinetic in its centre-of-
+    # mass frame plus its inner contacts' elastic energy) bounds how fast its top mass k can ever move
+    # relative to the group's centre of mass (gravity is common: the centre of mass frame is free fall);
+    # when mass k+1 already moves away faster than that, the group can never push it again.
+    M, P = jnp.cumsum(m), jnp.cumsum(m * v)
+    inner = jnp.concatenate([jnp.zeros(1), jnp.cumsum(pot[1:])])  # interfaces 1..k-1
+    e_int = jnp.maximum(jnp.cumsum(0.5 * m * v**2) - 0.5 * P**2 / M + inner, 0.0)
+    reach = jnp.sqrt(2.0 * e_int * (M - m) / (M * m))
+    # its internal motion is negligible; or gravity acts, so the group falls back to the ground anyway:
+    # its landing is a rebound, and its masses' velocities never become final
+    settled = (e_int <= _SETTLED * 0.5 * M * scale[n] ** 2) | (stack.gravity > 0)
+    escapes = (~closed[1:] & settled[:-1] & (v[1:] - (P / M)[:-1] >= reach[:-1])) & tail[1:n]  # k = 1..n-1
+    free = tail[0] | jnp.any(escapes)
+    if not stack.ground:
+        return touched & free
+    # above[k], k = 0..n: the masses above mass k fly apart (k >= 1: interface k strictly)
+    above = tail & jnp.concatenate([jnp.ones(1, bool), strict[1:], jnp.ones(1, bool)])
+    mech = m * (0.5 * v**2 + stack.gravity * x)
+    energy = jnp.cumsum(mech) + jnp.cumsum(pot)  # masses 1..k and their contacts, k = 1..n
+    bound = jnp.any((energy < 0) & above[1:])
+    return touched & ((apart[0] & free) | bound)
+
+
+def _cascade_complete(t, ys, args, **kwargs):
+    """diffrax event: the cascade-over flag that `_Tracked` wrote into the state's last entry (ends the
+    solve at the first accepted step where `_cascade_over` holds)."""
+    return ys[-1] > 0.5
+
+
+class _Contacts(eqx.Module):
+    """Per-interface bookkeeping of the accepted steps, carried in the solver state (`_Tracked`), so
+    that launch velocities and the energy audit need no step history (a history of `max_steps` rows is
+    the dominant cost of a vmapped solve, where every step selects over the whole buffer).
+
+    `rows (n, 6)`: per interface, the latest accepted point in contact (scaled time, -1 if never) and the
+    first accepted point after it (scaled time, SI overlap, overlap rate, and the velocities of the lower
+    and upper body, 0 for the ground); `now (n,)`: in contact at the latest point; `cascade (n + 5,)`:
+    `[over, rebounds, t_c, top_done, v_top, v_c...]`: whether the first cascade is over (`_cascade_over` held
+    at an accepted point; `rows` and `now` are then frozen), whether any contact closed after that, its
+    scaled time `t_c`, whether the top mass has passed the apex of its flight after its last push (the
+    top interface is then frozen: a later landing is a rebound) and its velocity at the latest point
+    (scaled, to see it change sign), and the scaled velocities at `t_c`; `energy`: the
+    energy at `t0` and the largest `|E - E(t0)|` so far (J), when audited. Packed into few arrays: each
+    array is a separate operation in every step of the loop.
+    """
+
+    rows: Array
+    now: Array
+    cascade: Array
+    energy: tuple[Array, Array] | None
+
+    @staticmethod
+    def update(c: _Contacts | None, t, ys, args, audit: bool) -> _Contacts:
+        stack, scale = args[:2]
+        n = stack.n
+        y = ys[: scale.shape[0]] * scale
+        x, v, _ = stack.split(y)
+        d, dd = stack.overlaps(x), stack.overlap_rates(v)
+        active = stack.in_contact(d, dd) & stack.interface_mask()
+        e = stack.total_energy(y) if audit else None
+        v_top = ys[2 * n - 1]
+        if c is None:
+            c = _Contacts(jnp.broadcast_to(jnp.asarray([-1.0, 0.0, 0.0, 0.0, 0.0, 0.0]), d.shape + (6,)),
+                          active & False, jnp.concatenate([jnp.zeros(4), v_top[None], ys[n : 2 * n]]),
+                          None if e is None else (e, 0.0 * e))
+        was_over, top_done = c.cascade[0] > 0, c.cascade[3] > 0
+        frozen = was_over | ((jnp.arange(n) == n - 1) & top_done)
+        left = c.now & ~active
+        t = jnp.broadcast_to(t, d.shape).astype(d.dtype)
+        v_lo = jnp.concatenate([jnp.zeros(1, v.dtype), v[:-1]])
+        rows = jnp.where(jnp.stack([active] + [left] * 5, axis=-1) & ~frozen[:, None],
+                         jnp.stack([t, t, d, dd, v_lo, v], axis=-1), c.rows)
+        now = jnp.where(frozen, c.now, active)
+        over = _cascade_over(t[0], ys, args, x, v, d, dd, active) & ~was_over
+        # the top mass's apex: free, pushed before, its velocity turned from up to down
+        apex = ~active[n - 1] & (rows[n - 1, 0] >= 0) & (c.cascade[4] > 0) & (v_top <= 0)
+        rebound = (c.cascade[1] > 0) | jnp.any(frozen & active & ~c.now)  # closes after it was open
+        head = jnp.stack([(was_over | over), rebound, jnp.where(over, t[0], c.cascade[2]),
+                          top_done | apex | over, v_top]).astype(d.dtype)
+        cascade = jnp.concatenate([head, jnp.where(over, ys[n : 2 * n], c.cascade[5:])])
+        if e is not None:  # elementwise, not `.at[].max`: a scatter is a slow unfused operation in the loop
+            e = (c.energy[0], jnp.maximum(c.energy[1], jnp.abs(e - c.energy[0])))
+        return _Contacts(rows, now, cascade, e)
+
+
+class _Tracked(dfx.AbstractWrappedSolver):
+    """Wraps a diffrax solver and updates `_Contacts` with every step's end point. diffrax keeps the
+    solver state of accepted steps only (`_integrate.py`: `solver_state = keep(new, old)`), so the
+    bookkeeping sees exactly the accepted points, as a saved step history would."""
+
+    solver: dfx.AbstractSolver
+    audit: bool = eqx.field(static=True)
+
+    @classmethod
+    def around(cls, solver: dfx.AbstractSolver, adjoint: dfx.AbstractAdjoint, audit: bool) -> _Tracked:
+        # diffrax's ForwardMode and DirectAdjoint set `scan_kind` of a Runge–Kutta solver left at None
+        # ("lax", "bounded") by `eqx.tree_at`, which cannot reach through the wrapper: do it here.
+        # (RecursiveCheckpointAdjoint leaves it None: the stages' loop is then "checkpointed", faster.)
+        kinds = {dfx.ForwardMode: "lax", dfx.DirectAdjoint: "bounded"}
+        kind = next((k for cls_, k in kinds.items() if isinstance(adjoint, cls_)), None)
+        if kind is not None and getattr(solver, "scan_kind", "") is None:
+            solver = eqx.tree_at(lambda s: s.scan_kind, solver, kind, is_leaf=lambda x: x is None)
+        return cls(solver, audit)
+
+    @property
+    def scan_kind(self):
+        return getattr(self.solver, "scan_kind", None)
+
+    @property
+    def root_finder(self):  # implicit solvers: diffrax fills its tolerances from the controller's
+        return self.solver.root_finder
+
+    @property
+    def term_structure(self):
+        return self.solver.term_structure
+
+    @property
+    def interpolation_cls(self):  # pyright: ignore
+        return self.solver.interpolation_cls
+
+    @property
+    def term_compatible_contr_kwargs(self):
+        return self.solver.term_compatible_contr_kwargs
+
+    def order(self, terms):
+        return self.solver.order(terms)
+
+    def strong_order(self, terms):
+        return self.solver.strong_order(terms)
+
+    def error_order(self, terms):
+        return self.solver.error_order(terms)
+
+    def init(self, terms, t0, t1, y0, args):
+        return self.solver.init(terms, t0, t1, y0, args), _Contacts.update(None, t0, y0, args, self.audit)
+
+    def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
+        inner, contacts = solver_state
+        y1, y_error, dense_info, inner, result = self.solver.step(terms, t0, t1, y0, args, inner, made_jump)
+        contacts = _Contacts.update(contacts, t1, y1, args, self.audit)
+        # the cascade-over flag, read by the stopping event (`_scaled_field`); its derivative is zero, so
+        # its error estimate is zero already
+        y1 = y1.at[-1].set(contacts.cascade[0])
+        return y1, y_error, dense_info, (inner, contacts), result
+
+    def func(self, terms, t0, y0, args):
+        return self.solver.func(terms, t0, y0, args)
+
+
+def _end_of_contacts(stack: Stack, c: _Contacts, time_scale, t_final):
+    """Per interface: the time its last contact ended (see module docstring), NaN if never in contact,
+    `t_final` if still in contact at the end. Differentiable through a final Newton step."""
+    n = stack.n
+    cols = jnp.arange(n)
+    ever = c.rows[:, 0] >= 0
+    ended = ever & ~c.now
+    t_k = jnp.where(ended, c.rows[:, 0] * time_scale, 0.0)
+    t_r = jnp.where(ended, c.rows[:, 1] * time_scale, 0.0)
+    d_r, dd_r = jnp.where(ended, c.rows[:, 2], 0.0), jnp.where(ended, c.rows[:, 3], 0.0)
+    curv = jnp.where((cols == 0) & stack.ground, stack.gravity, 0.0)  # ground: delta_0 = -x_1 is a parabola
+    lo0 = jnp.where(ended, t_k - t_r, -1.0)
+
+    def sep(s, d_r, dd_r, curv):
+        return stack.separation_function(d_r + dd_r * s + 0.5 * curv * s**2, dd_r + curv * s)
+
+    frozen = jax.lax.stop_gradient((d_r, dd_r, curv, lo0))
+
+    def bisect(_, bracket):
+        lo, hi = bracket
+        mid = 0.5 * (lo + hi)
+        pos = sep(mid, *frozen[:3]) > 0
+        return jnp.where(pos, mid, lo), jnp.where(pos, hi, mid)
+
+    lo, hi = jax.lax.fori_loop(0, 60, bisect, (frozen[3], jnp.zeros(n)))
+    s_b = 0.5 * (lo + hi)
+    g_b, dg_b = jax.jvp(lambda s: sep(s, d_r, dd_r, curv), (s_b,), (jnp.ones(n),))
+    dg_safe = jax.lax.stop_gradient(jnp.where(jnp.abs(dg_b) > 0, dg_b, 1.0))
+    s_newton = s_b - g_b / dg_safe
+    good = (jnp.abs(dg_b) > 0) & (sep(frozen[3], *frozen[:3]) > 0)
+    s_star = jnp.where(good, s_newton, s_b)
+    return jnp.where(ended, t_r + s_star, jnp.where(ever, t_final, jnp.nan))
+
+
+def _launch(stack: Stack, c: _Contacts, time_scale, t_end_if, t_final, v_final):
+    """Per mass: the end of its last push (the later end of its two interfaces), and its velocity then:
+    the velocity recorded at the first accepted point after that contact (`_Contacts.rows`), taken back
+    to the contact's end in free flight (`v + g (t_r - t_end)`, exact: the mass is free in between). A
+    mass still pushed at the end: its final velocity. NaN for a mass never pushed."""
+    n = stack.n
+    above = jnp.concatenate([t_end_if[1:], jnp.full(1, jnp.nan)])
+    use_above = jnp.isfinite(above) & (jnp.isnan(t_end_if) | (above > t_end_if))
+    t_end = jnp.where(use_above, above, t_end_if)
+    j = jnp.where(use_above, jnp.arange(n) + 1, jnp.arange(n))  # the interface of the last push
+    jc = jnp.minimum(j, n - 1)
+    rec_v = jnp.where(use_above, c.rows[jc, 4], c.rows[jc, 5])
+    t_r = c.rows[jc, 1] * time_scale
+    pushed_now = c.now[jc]
+    v_launch = jnp.where(pushed_now, v_final, rec_v + stack.gravity * (t_r - t_end))
+    return t_end, jnp.where(jnp.isnan(t_end), jnp.nan, v_launch)
