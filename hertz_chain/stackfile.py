@@ -1,278 +1,14 @@
-"""Stack files: TOML with units → a validated, declarative [`StackSpec`][hertz_chain.stackfile.StackSpec].
+"""Stack files: TOML with units → a validated, declarative `StackSpec`.
 
-A stack file describes one shock amplifier: the drop, the masses (explicit, or an MVG/MET design of
-the seed paper, Eqs 15 and 25), the gaps, the contact law of every interface, optional materials and
-contact geometry, and the solver settings. [`load_stack_file`][hertz_chain.stackfile.load_stack_file]
-reads a file; [`parse_stack`][hertz_chain.stackfile.parse_stack] takes TOML text or an already-parsed
-`dict`. Both return a frozen `StackSpec` of plain SI floats, strings and tuples (no pint objects, no
-JAX): building the simulator's `Stack` from it (computing MVG/MET masses, stiffness from materials,
-calibrating damping to a restitution) happens elsewhere, without re-reading the file.
+`load_stack_file(path)` reads a file and `parse_stack(text_or_dict)` takes TOML text or a parsed
+`dict`; both return a frozen `StackSpec` of plain SI floats, strings and tuples (no pint objects, no
+JAX). Every problem raises `StackFileError` with one line naming the dotted key and the problem. The
+user manual of the format, every key with its units, default and bounds, is `docs/stack-files.md`
+(`tests/test_stackfile.py` checks that every key this parser accepts is documented there); the
+vocabularies (laws, chi maps, solvers) are the tables of `hertz_chain.registry`.
 
-Conventions (`notes/CONVENTIONS.md`): masses are listed **bottom first** (mass 1 touches the
-ground); interface 0 is ground–mass 1 and interface *j* is mass *j* – mass *j+1*; initial velocities
-are **upward-positive**. The drop's `impact_velocity` is stored as the positive *downward* speed of
-the whole stack when mass 1 first touches the ground.
-
-## Values and units
-
-Every dimensional value is either a string that pint parses — `"8.4 kg"`, `"1 cm"`, `"200 GPa"`,
-`"1e9 N/m^1.5"`, `"2 ft"`, `"1 us"` — or a bare TOML number, which is read in SI units (kg, m, s,
-m/s, Pa, N/m^1.5, ...). A string with the wrong dimension is an error that names the key, e.g.
-`stack.gaps: '1 kg' has units of kilogram, expected a length (e.g. '1 cm')`. Quantities are
-converted to SI once, here; the spec holds floats only.
-
-## The normative example (project issue #5)
-
-```toml
-[drop]
-impact_velocity = "1 m/s"     # or: height = "5 cm"
-gravity = 0                   # default 9.80665 m/s^2
-
-[stack]
-masses = [8.4, 3.4683, 1.4320, 0.5913, 0.2441, 0.1008]   # kg, bottom first
-gaps = "1 cm"                 # one value for all, or a list of n-1
-
-[contact]                     # default for every interface, the ground included
-law = "tsuji"
-stiffness = "1e9 N/m^1.5"
-restitution = 0.8
-
-[solver]
-rtol = 1e-10
-```
-
-## Key reference
-
-| key | value | default |
-|---|---|---|
-| `title` | free text | none |
-| **`[drop]`** | | |
-| `drop.ground` | `true` (dropped on the ground) / `false` (horizontal chain, no ground) | `true` |
-| `drop.impact_velocity` | velocity ≥ 0, downward speed at first ground contact | one of the two (with a ground) |
-| `drop.height` | length ≥ 0, free-fall height of mass 1's lower surface; v = √(2 g h) | one of the two (with a ground) |
-| `drop.gravity` | acceleration ≥ 0 | 9.80665 m/s² with a ground, 0 without |
-| **`[stack]`** | | |
-| `stack.masses` | list of 2 to 50 (`MAX_MASSES`) masses > 0, bottom first | either this or `[stack.design]` |
-| `stack.gaps` | length ≥ 0, or a list of n−1 (gap between masses j and j+1) | required |
-| `stack.velocities` | list of n velocities (upward-positive), explicit initial state | none |
-| `stack.preload` | bool: start in static equilibrium under gravity (needs gaps = 0, gravity > 0) | `false` |
-| `stack.material` | material name, or a list of n | none (then give stiffness) |
-| `stack.radius` | radius of curvature of each mass's contact caps: length > 0 or `inf` (flat), or a list of n | none |
-| `stack.shape` | `"sphere"` / `"flat"`, or a list of n | `"sphere"` when `radius` is given |
-| **`[stack.design]`** | | |
-| `kind` | `"mvg"` (power law, Eq 15) / `"met"` (maximum energy transfer, Eq 25) | required |
-| `n` | integer from 2 to 50 (`MAX_MASSES`), or `"optimal"` (whose n must be ≤ 50) | `"optimal"` |
-| `restitution` | design restitution e ∈ (0, 1] | `contact.restitution` |
-| `bottom_mass`, `top_mass`, `mass_ratio` | masses > 0; R = m_n/m_1 ∈ (0, 1) | see below |
-| **`[ground]`** | (only with a ground) | |
-| `ground.material` | material name | none: rigid ground |
-| `ground.shape` | `"flat"` / `"sphere"` | `"flat"` |
-| `ground.radius` | length > 0 (sphere only) | `inf` |
-| **`[materials.NAME]`** | define or override a material by name | |
-| `youngs_modulus` | pressure > 0 | required |
-| `poisson_ratio` | number in (−1, 0.5] | required |
-| `density` | density > 0 | none |
-| **`[contact]`**, `[contact.ground]`, `[[contact.interface]]` | | |
-| `law` | `"hertz"`, `"hunt-crossley"`, `"tsuji"`, `"kelvin-voigt"`, `"viscoelastic"` | required in `[contact]` |
-| `stiffness` | N/m^1.5 (Hertzian laws) or N/m (`kelvin-voigt`), > 0 | from materials and geometry |
-| `restitution` | e ∈ [0.001, 1] (ground too: a contact law is passive) | one of restitution / alpha / damping |
-| `chi_map` | `hunt-crossley` only: `"hunt-crossley"`, `"herbert-mcwhannell"`, `"lee-wang"`, `"lankarani-nikravesh"`, `"gonthier"`, `"zhiying-qishao"`, `"flores"`, `"hu-guo"`, `"exact"` (`registry.CHI_MAPS`) | `"exact"` |
-| `calibration_velocity` | velocity > 0 (`hunt-crossley`, `viscoelastic` with restitution) | builder's choice (see below) |
-| `alpha` | s/m ≥ 0 (`hunt-crossley`) | none |
-| `damping` | ≥ 0: `tsuji` η ≤ 1e6 (plain number), `kelvin-voigt` c ≤ 1e9 N s/m, `viscoelastic` A ≤ 1 s | none |
-| `clamp` | bool: force clamped at F ≥ 0 | `true` |
-| `index` | `[[contact.interface]]` only: interface number j ∈ [1, n−1], or a list | required |
-| **`[solver]`** | | |
-| `solver` | `"tsit5"`, `"tsit5-diffrax"`, `"dopri5"`, `"dopri8"`, `"kvaerno5"`, `"kvaerno5-stock"` (`registry.SOLVERS`) | `"tsit5"` |
-| `rtol`, `atol` | numbers in (0, 1) and > 0 | simulator's default |
-| `t_max` | time > 0, ≤ 1e4 s | simulator's default (from the physics: covers the cascade) |
-| `until` | `"cascade"` or `"t_max"` | `"cascade"`: stop when the first cascade ends; `"t_max"` (needs `t_max`) goes on and reports later impacts as rebounds |
-| `max_steps` | integer from 1 to 10_000_000 (`MAX_STEPS`), history ≤ 4 GiB (`MAX_RUN_MEMORY`) | simulator's default |
-| `n_output` / `dt_output` | integer from 2 to 1_000_000 (`MAX_OUTPUT_POINTS`) / time > 0 with t_max/dt_output ≤ 1_000_000, or ≥ 1e-7 s (`MIN_DT_OUTPUT`) when `t_max` is not given (one of them) | simulator's default |
-
-A spec value of `None` means "not given": the builder or simulator applies its own default.
-
-## The drop
-
-With a ground (`drop.ground = true`, the default) exactly one of `drop.impact_velocity`,
-`drop.height` and `stack.velocities` sets the initial state. A height is converted with the file's
-own gravity, v = √(2 g h) (free fall of the whole stack through h). With `gravity = 0` nothing
-falls, so a height is ill-defined and is an error: give `impact_velocity` instead. (Using the
-standard gravity for the fall and zero gravity for the impacts would silently mix two worlds.)
-`drop.gravity` defaults to standard gravity, 9.80665 m/s² (CGPM 1901).
-
-## Contact sections and overrides
-
-`[contact]` is the default law of every interface, the ground (interface 0) included.
-`[contact.ground]` overrides the ground contact; `[[contact.interface]]` (an array of tables, each
-with an `index`, one interface number or a list of them) overrides interfaces 1..n−1. Interface 0
-is set only through `[contact.ground]`.
-
-An override inherits every key of `[contact]` that it does not set, with two rules:
-
-* an override that sets a **different `law`** starts afresh and inherits only `clamp`;
-* an override that sets its own damping (`restitution`, `alpha` or `damping`) drops the inherited
-  damping keys (`restitution`, `alpha`, `damping`, and `chi_map`/`calibration_velocity` unless it
-  sets `restitution`).
-
-Damping per law: `hertz` has none (elastic); `hunt-crossley` takes `alpha`, or `restitution` with
-`chi_map` (default `"exact"`) and an optional `calibration_velocity`; `tsuji` and `kelvin-voigt`
-take `restitution` or `damping` (their restitution does not depend on the impact velocity);
-`viscoelastic` takes `restitution` (with an optional `calibration_velocity`) or `damping` (= A).
-`calibration_velocity` unset (`None`) leaves the choice to the builder (the approach speed that the
-rigid model predicts for that interface). Keys that a law does not use are errors. Every
-restitution, the ground's included, is in (0, 1]: a contact law is passive. An "active ground"
-(e_{1,0} > 1, paper Eq 19) exists only in the rigid model (`stack_gain`, `simulate_rigid`).
-
-```toml
-[contact]
-law = "hunt-crossley"
-stiffness = "2.5e9 N/m^1.5"
-restitution = 0.8
-chi_map = "flores"
-calibration_velocity = "1 m/s"
-
-[contact.ground]              # interface 0
-law = "kelvin-voigt"          # a different law: nothing inherited but clamp
-stiffness = "5e7 N/m"
-restitution = 0.9
-
-[[contact.interface]]
-index = 3                     # mass 3 – mass 4
-stiffness = "1e9 N/m^1.5"     # same law: inherits restitution, chi_map, calibration_velocity
-
-[[contact.interface]]
-index = [4, 5]
-alpha = "0.3 s/m"             # replaces the inherited restitution/chi_map/calibration_velocity
-clamp = false
-```
-
-## Designs instead of masses
-
-`[stack.design]` replaces `stack.masses`; the masses are computed later by the rigid module.
-MVG (power law, Eq 15): give two of `bottom_mass`, `top_mass`, `mass_ratio` (the third follows from
-R = m_n/m_1) and `n` (an integer, or `"optimal"`: Eqs 22–24). MET (Eq 25, ratios fixed by e): give
-`n` and one of `bottom_mass`/`top_mass`, or `n = "optimal"` and two of the three (the n whose MET
-chain matches R). With `n = "optimal"` the number of masses is unknown here, so `gaps`, `radius`,
-`shape` and `material` must be single values and `stack.velocities` is not allowed.
-
-```toml
-[drop]
-height = "5 cm"
-
-[stack]
-gaps = 0
-[stack.design]
-kind = "mvg"
-mass_ratio = 0.012            # R = m_n / m_1
-bottom_mass = "8.4 kg"
-restitution = 0.8
-n = "optimal"                 # or 6
-
-[contact]
-law = "tsuji"
-stiffness = "1e9 N/m^1.5"
-restitution = 0.8
-```
-
-## Materials and geometry instead of stiffness
-
-When a contact section gives no `stiffness`, the Hertz stiffness k = (4/3) E* √R* (Hertz 1882;
-Johnson, *Contact Mechanics*, 1985, Eq 4.22) is computed from the materials and the contact caps:
-1/E* = (1−ν₁²)/E₁ + (1−ν₂²)/E₂ and 1/R* = 1/R₁ + 1/R₂ (a flat face has R = ∞; at least one of the
-two faces must be curved). Each mass has one radius of curvature for both its caps. A material name
-refers to `[materials.NAME]` in the file, else to the package's material table (checked when the
-stack is built). The ground is flat and rigid unless `[ground]` says otherwise.
-
-```toml
-[drop]
-impact_velocity = "2 m/s"
-
-[stack]
-masses = ["1 kg", "400 g", "160 g"]
-gaps = ["2 mm", "1 mm"]
-material = ["AISI 52100", "AISI 52100", "my steel"]
-radius = ["5 cm", "3 cm", inf]
-shape = ["sphere", "sphere", "flat"]
-
-[materials."my steel"]
-youngs_modulus = "200 GPa"
-poisson_ratio = 0.3
-density = "7850 kg/m^3"
-
-[ground]
-material = "AISI 1045"
-shape = "flat"
-
-[contact]
-law = "hunt-crossley"
-restitution = 0.85
-```
-
-## A horizontal chain and a resting stack
-
-```toml
-[drop]
-ground = false                # no ground, no interface 0; gravity defaults to 0
-
-[stack]
-masses = ["1 kg", "0.5 kg", "0.25 kg"]
-gaps = "1 mm"
-velocities = ["1 m/s", 0, 0]  # upward-positive (here: along the chain axis)
-
-[contact]
-law = "hertz"
-stiffness = "5e9 N/m^1.5"
-```
-
-```toml
-[drop]
-impact_velocity = "1.5 m/s"
-
-[stack]
-masses = [8.4, 3.4683, 1.4320]
-gaps = 0
-preload = true                # interfaces 1..n-1 start compressed by the weight above them
-                              # (interface 0 too when impact_velocity = 0: resting on the ground)
-```
-
-## Physical ranges and sizes
-
-Every value is checked here, before anything is built or allocated, so that a typo such as
-`masses = [1e308, ...]` or `max_steps = 1e300` fails on the key the user wrote rather than deep in the
-solver (an overflow, a `MemoryError`, a hang). After conversion to SI every quantity is finite and its
-magnitude lies in this range (`LIMITS`; zero is left to each key's own rule):
-
-| dimension | keys | magnitude |
-|---|---|---|
-| mass | `stack.masses`, `stack.design.bottom_mass`/`top_mass` and every design mass | 1e-12 kg to 1e6 kg |
-| length | `stack.gaps`, `drop.height`, radii | at most 1e10 m |
-| velocity | `drop.impact_velocity`, `stack.velocities`, `calibration_velocity`, and √(2 g h) of a `height` | at most 1e4 m/s |
-| acceleration | `drop.gravity` | at most 1e4 m/s² |
-| time | `solver.t_max`, `solver.dt_output`, viscoelastic `damping` | at most 1e4 s |
-| pressure | `youngs_modulus` | at most 1e13 Pa |
-| density | `density` | at most 1e5 kg/m³ |
-| stiffness | `stiffness` | at most 1e15 N/m^1.5 (or N/m) |
-| damping | `damping` (`DAMPING_LIMITS`): tsuji η; kelvin-voigt c; viscoelastic A | 1e6; 1e9 N s/m; 1 s |
-| damping | `alpha` | at most 1e6 s/m |
-
-With these ranges every product the simulator forms (m v², k δ^2.5, ...) stays finite. Sizes:
-at most `MAX_MASSES` = 50 masses (explicit, `stack.design.n`, or an `"optimal"` design, counted here
-with the rigid model), `solver.max_steps` ≤ `MAX_STEPS` = 10_000_000 and its step history
-(`run_memory`: `8 (max_steps + 1)(11 n + 2)` bytes) ≤ `MAX_RUN_MEMORY` = 4 GiB, `solver.n_output` ≤
-`MAX_OUTPUT_POINTS` = 1_000_000 and `t_max / dt_output` ≤ 1_000_000 (without `t_max`, whose default
-is chosen by the simulator, `dt_output` ≥ `MIN_DT_OUTPUT` = 1e-7 s), every restitution ≥
-`MIN_RESTITUTION` = 0.001 (the contact laws' calibration range). A quantity string has at most
-`MAX_QUANTITY_LENGTH` = 200 characters and its powers plain exponents of magnitude ≤ 100 (pint
-would otherwise evaluate `"10**10**10 kg"` exactly, forever). A stack file has at most
-`MAX_FILE_BYTES` = 10 MB; a UTF-8 byte-order mark at its start is ignored.
-
-## Errors
-
-Every problem raises [`StackFileError`][hertz_chain.errors.StackFileError] with one line naming the
-dotted key (`contact.stiffness`, `stack.masses[2]`, `contact.interface[0].index`) and the problem;
-an unknown key suggests the closest valid one (`difflib`), a broken file quotes tomllib's line and
-column. The exception carries `.key` (or `None`) and `.problem`.
+Conventions (`notes/CONVENTIONS.md`): masses bottom first; interface 0 is ground–mass 1, interface
+*j* is mass *j* – mass *j+1*; SI units inside, pint only here at the edge.
 """
 
 from __future__ import annotations
@@ -324,7 +60,7 @@ __all__ = [
 ]
 
 
-# ---- bounds (the "Physical ranges and sizes" section of the module docstring)
+# ---- bounds (the "Physical ranges and sizes" section of docs/stack-files.md)
 MAX_STEPS = 10_000_000
 """Largest `solver.max_steps`: the solver keeps buffers of `max_steps` rows."""
 MAX_RUN_MEMORY = 4 * 2**30
@@ -873,7 +609,7 @@ def _parse_drop(raw: Any) -> tuple[bool, dict]:
 
 
 def _merge_contact(default: dict, override: dict, path: str) -> dict:
-    """Apply the inheritance rules of the module docstring. Values are `(raw, dotted_key)`."""
+    """Apply the inheritance rules of docs/stack-files.md. Values are `(raw, dotted_key)`."""
     own = {k: (v, _join(path, k)) for k, v in override.items() if k != "index"}
     default_law = default.get("law", (None,))[0]
     if "law" in own and str(own["law"][0]).strip().lower() != str(default_law).strip().lower():
@@ -1460,7 +1196,7 @@ def parse_stack(data: Mapping | str, *, source: str | None = None) -> StackSpec:
 
 
 def load_stack_file(path: str | Path) -> StackSpec:
-    """Read and validate a stack file (TOML with units); see the module docstring for the format."""
+    """Read and validate a stack file (TOML with units); the format is docs/stack-files.md."""
     path = Path(path)
     try:
         if path.is_dir():

@@ -7,7 +7,7 @@ in-process (`hertz_chain.cli.main(argv)`); `SUBPROCESS` rows run the real execut
 
 Expected numbers are the documented bounds, imported by name: `MAX_MASSES` (hertz_chain.constants),
 `MAX_STEPS`, `MAX_OUTPUT_POINTS`, `MIN_DT_OUTPUT`, `MIN_RESTITUTION`, `LIMITS`, `DAMPING_LIMITS`,
-`MAX_FILE_BYTES`, `MAX_QUANTITY_LENGTH` (hertz_chain.stackfile; the module docstring's "Physical ranges
+`MAX_FILE_BYTES`, `MAX_QUANTITY_LENGTH` (hertz_chain.stackfile; docs/stack-files.md, "Physical ranges
 and sizes"), and `NAME_MAX_FALLBACK` / `os.pathconf(..., "PC_NAME_MAX")` (hertz_chain._paths).
 """
 

@@ -675,3 +675,20 @@ def test_unit_registry_cache_never_stops_a_run(tmp_path, broken):
     proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert float(proc.stdout) == 0.01  # 1 cm = 0.01 m exactly (SI definition)
+
+
+def test_every_key_the_parser_accepts_is_in_the_manual():
+    # docs/stack-files.md is the user manual: every key of every section the parser accepts (its own
+    # tables of allowed keys) appears there as a dotted key or a `key` entry
+    from pathlib import Path
+
+    from hertz_chain import stackfile as sf
+
+    manual = (Path(__file__).resolve().parents[1] / "docs" / "stack-files.md").read_text()
+    sections = {"drop": sf._DROP_KEYS, "stack": sf._STACK_KEYS, "stack.design": sf._DESIGN_KEYS,
+                "ground": sf._GROUND_KEYS, "contact": sf._CONTACT_KEYS, "solver": sf._SOLVER_KEYS,
+                "materials": sf._MATERIAL_KEYS, "": sf._TOP_KEYS}
+    missing = [f"{sec}.{key}" if sec else key for sec, keys in sections.items() for key in keys
+               if not any(form in manual for form in (f"`{sec}.{key}`", f"`{key}`", f"[{key}]", f"[{sec}.{key}]",
+                                                      f"[[{key}]]", f"[{key}.NAME]"))]
+    assert not missing, missing
