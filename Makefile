@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test bench bench-smoke notebooks clean
+.PHONY: demo test docs bench bench-smoke notebooks clean
 
 $(STAMP): requirements.lock pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -18,6 +18,10 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -n 2 -q
+
+# The documentation site (mkdocs-material + mkdocstrings) into site/, every warning an error.
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
 
 # Full benchmark suite (~15 min on 2 cores): writes benchmarks/results.md and the raw JSON.
 bench: $(STAMP)
@@ -32,4 +36,4 @@ notebooks: $(STAMP)
 	$(BIN)/python notebooks/execute.py --force
 
 clean:
-	rm -rf $(VENV) build *.egg-info
+	rm -rf $(VENV) build site *.egg-info

@@ -120,3 +120,22 @@ def test_no_cache_turns_every_cache_off(tmp_path):
     out = json.loads(proc.stdout.strip().splitlines()[-1])
     assert out == {"jax": None, "cache_dir": None}
     assert not root.exists()
+
+
+def test_the_documentation_site_builds_strictly(tmp_path):
+    # `make docs`: mkdocs-material + mkdocstrings, every warning (a broken link, an unresolved
+    # reference, a page missing from the navigation) an error
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    mkdocs = Path(sys.executable).with_name("mkdocs")
+    proc = subprocess.run([str(mkdocs), "build", "--strict", "--site-dir", str(tmp_path / "site")], cwd=root,
+                          capture_output=True, text=True, timeout=300,
+                          env=dict(os.environ, NO_MKDOCS_2_WARNING="1"))
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    api = (tmp_path / "site" / "api" / "index.html").read_text()
+    for name in ("simulate_batch", "launch_velocity", "LawRow", "Status", "load_stack_file"):
+        assert name in api, name
