@@ -808,6 +808,21 @@ def _parse_design(raw: Any, default_restitution: float | None) -> DesignSpec:
     return _check_design(DesignSpec(kind, n, e, m1, mn, R))
 
 
+
+def _optimal_n(count, what: str, d) -> int:
+    """`count(R, e, n_limit=MAX_MASSES)` (the rigid model's optimal number of masses), or one line
+    naming `stack.design.n` when that stack would have more than `MAX_MASSES` masses."""
+    from .errors import ParameterError
+
+    try:
+        return int(count(d.mass_ratio, d.restitution, n_limit=MAX_MASSES))
+    except ParameterError as exc:
+        if exc.name != "n_limit":
+            raise
+        raise _error("stack.design.n", f"'optimal' is invalid here: the {what} for R = {d.mass_ratio:.6g}, "
+                     f"e = {d.restitution:.6g} has more than {MAX_MASSES} masses (the most a stack may "
+                     "have); give an integer n") from None
+
 def _check_design(d: DesignSpec) -> DesignSpec:
     """The design's masses exist and lie in the mass range; an 'optimal' n is at most MAX_MASSES.
 
@@ -821,25 +836,11 @@ def _check_design(d: DesignSpec) -> DesignSpec:
     try:
         with np.errstate(all="ignore"):
             if d.n is None and d.kind == "mvg":
-                try:
-                    n = int(rigid.mvg_optimal_n(d.mass_ratio, d.restitution, n_limit=MAX_MASSES))
-                except ParameterError as exc:
-                    if exc.name != "n_limit":
-                        raise
-                    raise _error("stack.design.n", f"'optimal' is invalid here: the optimal MVG stack for "
-                                 f"R = {d.mass_ratio:.6g}, e = {d.restitution:.6g} has more than "
-                                 f"{MAX_MASSES} masses (the most a stack may have); give an integer n") from None
+                n = _optimal_n(rigid.mvg_optimal_n, "optimal MVG stack", d)
                 masses = rigid.mvg_masses(d.mass_ratio, n, d.bottom_mass)
             elif d.kind == "met":
                 if d.n is None:
-                    try:
-                        n = int(rigid.met_n_for_ratio(d.mass_ratio, d.restitution, n_limit=MAX_MASSES))
-                    except ParameterError as exc:
-                        if exc.name != "n_limit":
-                            raise
-                        raise _error("stack.design.n", f"'optimal' is invalid here: the MET chain for "
-                                     f"R = {d.mass_ratio:.6g}, e = {d.restitution:.6g} has more than "
-                                     f"{MAX_MASSES} masses (the most a stack may have); give an integer n") from None
+                    n = _optimal_n(rigid.met_n_for_ratio, "MET chain", d)
                     m1 = d.bottom_mass if d.bottom_mass is not None else d.top_mass / d.mass_ratio
                 else:
                     n = d.n
