@@ -21,44 +21,14 @@ relative speed, in general; 1 m/s if everything is at rest); dissipated energies
 `E = sum(m) V^2/2`. So `rtol`/`atol` mean the same for every design (Hertz contact: Johnson, *Contact
 Mechanics*, 1985, §11.1; docs/references.md, "Hertz single impact").
 
-**Solvers.** `"tsit5"` (default: `UnrolledTsit5`, diffrax's Tsit5 with its stages written out, 2.2x
-faster per step on a 10-mass stack: 5.6 -> 2.5 us, and 0.55 -> 0.38 ms per design in a 5-mass batch over 2
-cores), `"tsit5-diffrax"`, `"dopri8"`, `"kvaerno5"` (implicit, with a corrected Newton
-iteration), `"kvaerno5-stock"`, or any diffrax solver instance. The default is Tsit5: the stack is not
-stiff for Hertzian contact (`dt rho(J) <= 0.32` along the steps, docs/references.md, "Solver notes"), so an implicit solver
-buys nothing. Measured (2-core CPU, 5/10 masses, ratio 0.5, Hertz, gaps 0.1 mm, rtol = atol = 1e-8, per
-`simulate` call): Tsit5 179/313 steps, 6.4/6.5 ms; Dopri8 157/264 steps, 6.6/8.1 ms; Kvaerno5 (fixed)
-187/318 steps (30/46 rejected), 19/43 ms; Kvaerno5 (stock) 538/831 steps (122/180 rejected), 46/79 ms. diffrax 0.7.2's implicit
-solvers use `VeryChord`, which declares divergence after two iterations (fixed upstream, diffrax PR
-#754), so most steps are rejected; `"kvaerno5"` passes an `optimistix.Chord` with proper tolerances as
-`root_finder` instead.
+**Solvers.** `"tsit5"` (the default: `UnrolledTsit5`, Tsitouras' 5(4) pair with its stages written
+out) or any row of `hertz_chain.registry.SOLVERS`, or a diffrax solver instance. The stack is not stiff
+for Hertzian contact, so an explicit method is the right default.
 
-**Default tolerances** `rtol = atol = 1e-10` (scaled state) with `resolve_onsets=True` follow from the
-benchmark table (`benchmarks/results.md`, README) and from an error-distribution study. The table's
-single solves (no onset proxy: the same equations as scipy; reference Dopri8 at 1e-13; n = 2, 5, 10, 20;
-gapped Hertz/Tsuji, touching, e = 0.3, soft pad): at 1e-10 Tsit5 puts the top mass's launch velocity
-within 1e-7 (relative) in 18 of 20 cases and misses by up to 7x in two (gapped Tsuji, n = 5: 1.0e-7; soft
-pad, n = 20: 7.4e-7; the stock diffrax Tsit5, the same method rounded differently, missed in two other
-cases by up to 3x); Dopri8 misses in one (soft pad, n = 20: 2.8e-7). At the former 1e-8 errors reached
-5e-5. Summed over n at matched accuracy (run of 2026-11-23 11:02; matched = the loosest rtol of a 1-2-5
-grid that reaches 1e-7 and keeps it for a decade of tighter rtols), Tsit5 (`UnrolledTsit5`) is the fastest
-diffrax method in all five regimes: 9.0 ms gapped Hertz (Dopri8 11.2), 14.4 gapped Tsuji (34.3), 6.5
-touching (13.8), 14.6 for e = 0.3 (35.8), 39.7 soft pad (92.8); diffrax's own Tsit5 takes 1.7-2.3x as
-long, Kvaerno5 63-87x. The matched rtol of Tsit5 is 1e-10 to 2e-9 in 18 of 20 cases (5e-11 for
-gapped Tsuji n = 5 and soft pad n = 20): the default sits at the tight end of that range. (Before the
-stages were unrolled, Dopri8 won for gapped Hertz and e = 0.3, by
-margins that run-to-run noise of 10-20 % on the shared 2-core machine could reverse.) Its error tail is
-tamed by the onset proxy. The study: one case per regime hides a heavy
-tail. Over 100 gaps within 1e-11 of 1 cm (paper's six-mass MVG, 1e9 N/m^1.5, 1 m/s; error against Dopri8
-at 1e-12), a step that straddles a contact onset is now and then accepted with a large error: without the
-onset proxy, Hertz at 1e-10 has median error 1.8e-8 but maximum 3.3e-7; with it, maximum 3.6e-10 (1.4x the
-steps). Tsuji (clamped): maximum 9.0e-7 -> 4.4e-7 at 1e-10 and 4.8e-8 -> 2.0e-8 at 1e-11 (its
-`delta^{1/4}` damping and the clamp's release keep a tail that the proxy does not remove: ask for 1e-11
-when a damped stack needs 1e-7 everywhere).
-
-**Step control.** `PIDController(pcoeff=0.4, icoeff=0.3)` (Söderlind 2003; suits the non-smooth contact
-onset), and a largest step of `max_step` contact times (default 0.5) so that a free flight never steps
-over a whole contact.
+**Default tolerances** `rtol = atol = 1e-10` in the scaled units, with `Tolerances.resolve_onsets`
+(an auxiliary state that makes the step controller resolve every contact onset); `launch_velocity`
+uses `1e-11` for its gradients. **Step control:** diffrax's PID controller (`pcoeff = 0.4`,
+`icoeff = 0.3`) with a largest step of half a contact time, so a free flight never steps over a contact.
 
 **Stopping: the end of the first cascade.** The solve ends (a boolean `diffrax.Event`) at the first
 accepted step where the cascade is over (`_cascade_over`): something has touched (a velocity departs from
@@ -66,9 +36,9 @@ free flight), every contact between masses is open and no neighbours approach, a
 the ground or rests on it; more generally, the lower masses `1..k` are bound to the ground (their energy
 is below that of resting unloaded on it) or, as a settled group in flight, can never reach mass `k+1`
 again, while everything above them flies apart. Under a common gravity the relative velocity of two
-free masses is constant, so after that only a return to the ground can start anything new: a rebound. With `until="t_max"` the
-solve goes on to `t_max`, the contact bookkeeping frozen at the cascade's end, and later contacts make the
-status "complete with rebounds". The top mass's launch is frozen earlier if it passes the apex of its
+free masses is constant, so after that only a return to the ground can start anything new: a rebound.
+With `until="t_max"` the solve goes on to `t_max`, the contact bookkeeping frozen at the cascade's end,
+and later contacts make the status "complete with rebounds". The top mass's launch is frozen earlier if it passes the apex of its
 flight before the cascade is over: its landing back on the stack is a rebound too. `t_max` defaults to a
 limit from the physics (`_default_t_max`); reaching it, or `max_steps`, first leaves the run
 "incomplete" (`hertz_chain.status.Status`).
@@ -87,33 +57,18 @@ step history is needed: `launch_velocity` and `simulate_batch(..., save_steps=Fa
 their cost per step does not grow with `max_steps`.
 
 **Batches.** `simulate_batch` vmaps one compiled solve over the designs and, when there are several JAX
-devices, splits the designs over them (`jax.shard_map`); on a CPU, `hertz_chain` makes every core a
-device before JAX starts (`jax_num_cpu_devices`; `HERTZ_CHAIN_CPU_DEVICES` overrides, and a choice the
-user made first is kept). Every device loops until its slowest design is done.
+devices, splits the designs over them (`jax.shard_map`); on a CPU every core is made a device before
+JAX starts (`HERTZ_CHAIN_CPU_DEVICES` overrides; a choice the user made first is kept).
 
-**Gradients.** Discretise-then-optimise through the solver. The tangent of the discretised solve is not
-error-controlled, and the contact onset (where `F ~ delta^{3/2}` is not smooth) spoils it: measured on a
-3-mass Hunt–Crossley stack with gravity and gaps, jacfwd vs central differences was 16 % off at
-`tol = 1e-8` and 4 % at `1e-10` (worst parameter: stiffness and gaps); with `Tolerances(resolve_onsets=True)`
-(an auxiliary state that makes the controller resolve every onset) it is 1.1e-4 at `1e-10` and 3.5e-6 at
-`1e-11`. `launch_velocity` therefore defaults to `rtol = atol = 1e-11` with `resolve_onsets=True`. Use
-`adjoint="forward"` (`diffrax.ForwardMode`, for `jax.jacfwd`/`jax.jvp`; cheapest for a few parameters:
-33 ms for 11 parameters) or `"reverse"` (for `jax.grad`, the default of `launch_velocity`; agreed with
-forward mode to 5e-7). Reverse mode replays the accepted steps: the solve saves its accepted states
-(`4n` numbers per step of `max_steps`), and the backward pass runs once down that history, applying
-`jax.vjp` of the solver's own step to each, with the step times frozen, as diffrax's controller freezes
-them (it stops gradients through the step size). It is the discrete adjoint that diffrax's
-`RecursiveCheckpointAdjoint` computes through its loop (they agree to rounding, 1e-14, tested), without
-storing the whole loop state at every step and replaying the controller, the event and the bookkeeping
-(`_replayed_solve`): 1.3-1.5x cheaper than that with a checkpoint at every step (benchmarks). It supports reverse mode
-only; pass a diffrax adjoint (`RecursiveCheckpointAdjoint()`) for forward-over-reverse (Hessians).
-`BacksolveAdjoint` cannot be used: it refuses events. Laws whose Jacobian is
-singular at the onset (Tsuji `delta^{1/4}`, viscoelastic `delta^{1/2}` damping) give much less accurate
-discrete gradients (percent level at 1e-10 without `resolve_onsets`): check them against finite
-differences before relying on them. Measured with the onset proxy (benchmarks, gapped stacks, gradient
-with respect to the masses, central differences of a 1e-13 reference, error relative to the largest
-component): Hertz agrees to 4e-9 at `1e-11` (n = 5 and 10); Tsuji to 1.4e-3 (n = 5) and 2.7e-4 (n = 10)
-at `1e-11`, and 2e-4 (n = 5) at `1e-13`, forward and reverse mode alike.
+**Gradients.** Discretise-then-optimise through the solver: `launch_velocity` differentiates the
+discrete solve, forward (`adjoint="forward"`, `jax.jacfwd`) or reverse (`"reverse"`, `jax.grad`, by
+replaying the accepted steps: the discrete adjoint that diffrax's `RecursiveCheckpointAdjoint` computes,
+without storing the loop state). The derivative is as accurate as the solve's tolerance, no better;
+laws whose Jacobian is singular at the onset (Tsuji, viscoelastic) give less accurate discrete
+gradients: check them against finite differences.
+
+The reasoning behind these defaults, with the measurements that decided them, is the developer page
+`docs/solver-defaults.md`.
 """
 
 from __future__ import annotations
@@ -282,10 +237,9 @@ def simulate_batch(
     so this is the throughput mode for design sweeps. With the history (default), under `vmap` every
     step updates the `max_steps`-long buffers of every design by a select, so the cost per step grows
     with `max_steps`: keep `max_steps` near what the designs need (default 4096; a design that needs more
-    is flagged `"max_steps reached"`). With several JAX devices (every CPU core is one: module
-    docstring, "Batches") the designs are split over them. Measured (benchmarks/results.md, 5 masses,
-    1024 designs, 2 cores, run of 2026-11-23 11:02): 0.37 ms/design without the history, 0.85 ms with it
-    at `max_steps = 1024`.
+    is flagged "incomplete: max_steps reached"). With several JAX devices (every CPU core is one:
+    module docstring, "Batches") the designs are split over them. `until` as for `simulate`. Costs per
+    design are measured in `benchmarks/` (`make bench`).
     """
     ts, t_max, cfg = _prepare(stacks, states, ts, t_max, solver, tolerances, max_steps, None, save_steps, until)
     if getattr(cfg.solver, "scan_kind", "") is None:
@@ -362,11 +316,9 @@ def launch_velocity(
     reverse mode only), `"forward"` (`jax.jacfwd`, `jax.jvp`), or a diffrax adjoint, e.g.
     `diffrax.RecursiveCheckpointAdjoint()` for higher-order derivatives.
 
-    Cost (benchmarks/results.md, 2 CPU cores): for the gradient with respect to all n masses, reverse
-    mode costs 2.9x-3.9x one solve (Tsuji and Hertz, n = 5, 10: 5.7-17.3 ms; diffrax's own reverse mode
-    4.3x-6.0x); forward mode (`jax.jacfwd`, `adjoint="forward"`, 4.8x-7.5x) grows with the number of
-    parameters: prefer it for two or three. Reverse mode keeps the accepted states, `32 n` bytes per
-    step of `max_steps`.
+    Cost: reverse mode costs a few solves whatever the number of parameters; forward mode grows with
+    it (prefer it for two or three). Reverse mode keeps the accepted states, `32 n` bytes per step of
+    `max_steps`. Measured ratios: `benchmarks/results.md`.
     """
     tolerances = tolerances or Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True)
     replay = isinstance(adjoint, str) and adjoint == "reverse"
