@@ -1,35 +1,21 @@
-"""Simulating stacks with diffrax: closed forms, published values, invariants, batching, gradients."""
+"""Simulating stacks: closed forms, published values, invariants (batches, gradients and solvers have their own files)."""
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
+from _helpers import G, TIGHT
+from _helpers import mvg as _mvg
 from scipy.integrate import solve_ivp
 from scipy.special import beta
 
-from hertz_chain.status import Status
-from hertz_chain.analysis import analyse
 from hertz_chain.contact import Hertz, HuntCrossley, KelvinVoigt, Tsuji
-from hertz_chain.errors import ParameterError, SolverError
-from hertz_chain.simulate import (
-    Tolerances,
-    launch_velocity,
-    restitution,
-    simulate,
-    simulate_batch,
-)
-from hertz_chain.stack import STANDARD_GRAVITY, Stack, State, at_impact, resting, stack_designs
-
-G = STANDARD_GRAVITY
-TIGHT = Tolerances(rtol=1e-11, atol=1e-11)
+from hertz_chain.errors import ParameterError
+from hertz_chain.simulate import Tolerances, restitution, simulate
+from hertz_chain.stack import Stack, State, at_impact, resting
+from hertz_chain.status import Status
 
 # Hertz impact constant: t_c = (4/5) B(2/5, 1/2) delta_max / v = 2.9432752 delta_max / v (closed form of
 # t_c = 2 int_0^dmax d(delta)/sqrt(v^2 - 4 k delta^{5/2}/(5 m)); docs/references.md quotes 2.94328).
 HERTZ_TC = 0.8 * beta(0.4, 0.5)
-
-
-def _mvg(n, ratio=0.5):
-    return ratio ** np.arange(n)
 
 
 def test_single_hertz_impact_closed_forms():
@@ -194,175 +180,6 @@ def test_resting_stack_stays_at_rest():
     assert np.all(sol.launch_velocities == 0.0) or np.all(np.abs(sol.launch_velocities) < 1e-9)
     np.testing.assert_allclose(sol.steps.accelerations[0], 0.0, atol=1e-9 * G)
     np.testing.assert_allclose(sol.steps.velocities[-1], 0.0, atol=1e-9)
-
-
-def test_convergence_with_tolerance():
-    # Reference: self-convergence against a Dopri8 solve at rtol = atol = 1e-12 (an independent solver).
-    stack = Stack(_mvg(5), Hertz(1e9), gravity=G)
-    s0 = at_impact(stack, 1.0, 1e-4)
-    ref = simulate(stack, s0, solver="dopri8", tolerances=Tolerances(1e-12, 1e-12)).launch_velocities[-1]
-    errs = [abs(simulate(stack, s0, tolerances=Tolerances(t, t)).launch_velocities[-1] / ref - 1)
-            for t in (1e-6, 1e-8, 1e-10)]
-    assert errs[0] > errs[1] > errs[2]
-    assert errs[2] < 1e-7
-
-
-def test_unrolled_tsit5_equals_diffrax_tsit5():
-    # Reference: diffrax's own Tsit5 (same tableau, stages in a loop): one step of a nonlinear system
-    # agrees to rounding in the solution, the error estimate and the dense output; a fixed-step solve too.
-    import diffrax as dfx
-
-    from hertz_chain.simulate import UnrolledTsit5
-
-    term = dfx.ODETerm(lambda t, y, a: jnp.stack([y[1], -jnp.sin(y[0]) - a * y[1] * jnp.abs(y[1]) + jnp.cos(3 * t)]))
-    y0, args, t0, t1 = jnp.array([0.3, -1.2]), 0.7, 0.1, 0.35
-    out = []
-    for solver in (UnrolledTsit5(), dfx.Tsit5()):
-        state = solver.init(term, t0, t1, y0, args)
-        y1, err, dense, _, _ = solver.step(term, t0, t1, y0, args, state, False)
-        mid = solver.interpolation_cls(t0=t0, t1=t1, **dense).evaluate(0.2)
-        out.append((y1, err, mid))
-    for a, b in zip(*out):  # atol: rounding of sums of O(1) stage values (the error estimate cancels)
-        np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-15)
-    sols = [dfx.diffeqsolve(term, s, 0.0, 5.0, 0.01, y0, args=args, stepsize_controller=dfx.ConstantStepSize(),
-                            saveat=dfx.SaveAt(ts=jnp.linspace(0, 5, 11))).ys for s in (UnrolledTsit5(), dfx.Tsit5())]
-    np.testing.assert_allclose(sols[0], sols[1], rtol=1e-11, atol=1e-13)
-
-
-def test_kvaerno5_newton_fix():
-    # Reference: diffrax 0.7.2's VeryChord stops after two iterations (diffrax PR #754); a Chord root
-    # finder with a proper termination test must need fewer rejected steps, and agree with Tsit5.
-    stack = Stack(_mvg(3), Hertz(1e9), gravity=G)
-    s0 = at_impact(stack, 1.0, 1e-4)
-    tol = Tolerances(1e-8, 1e-8)
-    explicit = simulate(stack, s0, tolerances=tol)
-    fixed = simulate(stack, s0, solver="kvaerno5", tolerances=tol)
-    stock = simulate(stack, s0, solver="kvaerno5-stock", tolerances=tol)
-    assert fixed.num_rejected_steps < stock.num_rejected_steps / 2
-    assert fixed.num_steps < stock.num_steps
-    # both within their own global error (~100 x tol, see test_convergence_with_tolerance)
-    np.testing.assert_allclose(fixed.launch_velocities, explicit.launch_velocities, rtol=1e-5)
-
-
-def test_batch_equals_individual_and_isolates_failure():
-    # Reference: vmap must reproduce the individual solves; a design needing more steps than max_steps
-    # (0.6 m gaps at 0.5 contact times per step) fails alone.
-    m = _mvg(3)
-    ks = [1e9, 3e8, 1e9]
-    gaps = [1e-4, 2e-4, 0.6]
-    grid = np.linspace(0.0, 1.2e-3, 25)
-    stacks = [Stack(m, HuntCrossley(k, 0.05), gravity=G) for k in ks]
-    states = [at_impact(s, 1.0, g) for s, g in zip(stacks, gaps)]
-    batch = simulate_batch(stack_designs(stacks), jax.tree.map(lambda *x: jnp.stack(x), *states),
-                           tolerances=TIGHT, max_steps=3000, ts=grid)
-    assert list(batch.ok) == [True, True, False]
-    assert batch.status[2] == Status.INCOMPLETE_MAX_STEPS
-    for i in range(2):
-        one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=3000, ts=grid)
-        # batched kernels round differently, so the step sequences drift apart: agreement is to the
-        # global error of the solve (~1e-9 at rtol = atol = 1e-11), not bitwise
-        assert abs(int(batch.num_steps[i]) - one.num_steps) <= 0.03 * one.num_steps
-        np.testing.assert_allclose(batch.launch_velocities[i], one.launch_velocities, rtol=1e-8)  # ~ global error
-        # dense output on a common grid (the step sequences drift apart by rounding of the controller)
-        np.testing.assert_allclose(batch.grid["velocities"][i], one.grid.velocities, rtol=0, atol=1e-8)
-        np.testing.assert_allclose(batch.design(i).grid.forces, one.grid.forces, rtol=1e-6)
-    with pytest.raises(SolverError, match="max_steps"):
-        simulate(stacks[2], states[2], tolerances=TIGHT, max_steps=3000)
-    # Without the step history (throughput mode) the launch data are unchanged: same reference.
-    lean = simulate_batch(stack_designs(stacks), jax.tree.map(lambda *x: jnp.stack(x), *states),
-                          tolerances=TIGHT, max_steps=3000, save_steps=False)
-    assert lean.steps is None and list(lean.ok) == [True, True, False]
-    for i in range(2):
-        one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=3000)
-        np.testing.assert_allclose(lean.launch_velocities[i], one.launch_velocities, rtol=1e-8)
-        np.testing.assert_allclose(lean.launch_times[i], one.launch_times, rtol=1e-7)
-        assert lean.design(i).steps is None
-    with pytest.raises(ParameterError, match="step history"):
-        analyse(lean.design(0))
-
-
-def test_batch_split_over_devices_equals_individual():
-    # Reference: individual solves. Five designs over the two CPU devices of conftest (shard_map, the
-    # last design repeated once to fill the second device, then dropped), with and without history.
-    assert jax.local_device_count() == 2
-    ratios = [0.3, 0.4, 0.5, 0.6, 0.7]
-    stacks = [Stack(r ** np.arange(3), HuntCrossley(1e9, 0.05), gravity=G) for r in ratios]
-    states = [at_impact(s, 1.0, 1e-4) for s in stacks]
-    xs = jax.tree.map(lambda *x: jnp.stack(x), *states)
-    for save in (True, False):
-        batch = simulate_batch(stack_designs(stacks), xs, tolerances=TIGHT, max_steps=3000, save_steps=save)
-        assert len(batch) == 5 and batch.ok.all()
-        for i in range(5):
-            one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=3000)
-            np.testing.assert_allclose(batch.launch_velocities[i], one.launch_velocities, rtol=1e-8)
-            # batched kernels round differently and the step sequences drift apart (module docstring)
-            assert abs(int(batch.num_steps[i]) - one.num_steps) <= 0.05 * one.num_steps
-            # the audit (~1e-11 here: the solver's truncation error) is kept while solving without the
-            # history, from the saved steps with it; batched rounding moves the steps, not the audit
-            assert batch.energy_error[i] == pytest.approx(one.energy_error, rel=1e-3)
-
-
-def _hc_top(theta, tol, adjoint="forward", solver="tsit5"):
-    # top launch velocity of a 3-mass Hunt–Crossley stack with gravity and gaps, as a function of
-    # theta = (masses, gaps, stiffness k / 1e8, damping alpha)
-    m, gaps, k, alpha = theta[0:3], theta[3:5], theta[5:8] * 1e8, theta[8:11]
-    stack = Stack(m, HuntCrossley(k, alpha), gravity=G)
-    return launch_velocity(stack, at_impact(stack, 1.0, gaps), adjoint=adjoint, solver=solver,
-                           tolerances=Tolerances(tol, tol, resolve_onsets=True))[-1]
-
-
-THETA = jnp.asarray([1.0, 0.5, 0.25, 2e-3, 1e-3, 2.0, 1.5, 1.0, 0.1, 0.15, 0.2])
-
-
-def test_gradient_matches_finite_differences():
-    # Reference: central finite differences of the same model at rtol = atol = 1e-12 (step 1e-4 relative):
-    # d(top launch velocity)/d(masses, gaps, stiffness k, damping alpha), Hunt–Crossley, with gravity;
-    # forward mode (jacfwd) and reverse mode (jax.grad, the replayed discrete adjoint) alike.
-    forward = np.asarray(jax.jacfwd(lambda th: _hc_top(th, 1e-11))(THETA))
-    reverse = np.asarray(jax.grad(lambda th: _hc_top(th, 1e-11, "reverse"))(THETA))
-    fd = np.empty_like(forward)
-    for i in range(THETA.size):
-        h = 1e-4 * float(THETA[i])
-        step = jnp.zeros_like(THETA).at[i].set(h)
-        fd[i] = (_hc_top(THETA + step, 1e-12) - _hc_top(THETA - step, 1e-12)) / (2 * h)
-    # relative error per parameter, in the natural unit of that parameter (|dv/dln(theta)| scale)
-    scale = np.maximum(np.abs(fd), 1e-2 * np.max(np.abs(fd * np.asarray(THETA))) / np.abs(np.asarray(THETA)))
-    # the discrete derivative is accurate to the solve's tolerance, not better: at 1e-11 the two modes
-    # (different step sequences) are within 2e-4 (measured 2e-5 forward, 1.6e-4 reverse, for a gap), and
-    # they converge with the tolerance: at 1e-12 both are within 1e-5 of the differences
-    assert np.max(np.abs(forward - fd) / scale) <= 2e-4
-    assert np.max(np.abs(reverse - fd) / scale) <= 2e-4
-    reverse_12 = np.asarray(jax.grad(lambda th: _hc_top(th, 1e-12, "reverse"))(THETA))
-    assert np.max(np.abs(reverse_12 - fd) / scale) <= 1e-5
-
-
-@pytest.mark.parametrize("solver", ["tsit5", "dopri8"])
-def test_reverse_replay_equals_diffrax_checkpointed_adjoint(solver):
-    # Reference: diffrax's own reverse mode through the solver loop (RecursiveCheckpointAdjoint, which
-    # differentiates every accepted step with the step sizes frozen by its controller): the replayed
-    # adjoint is the same discrete derivative, so they agree to rounding (1e-12 of the largest component).
-    # Gravity makes the launch velocity depend on the contacts' recorded points; gaps enter through y0.
-    import diffrax as dfx
-
-    replay = np.asarray(jax.grad(lambda th: _hc_top(th, 1e-10, "reverse", solver))(THETA))
-    diffrax_rev = np.asarray(jax.grad(lambda th: _hc_top(
-        th, 1e-10, dfx.RecursiveCheckpointAdjoint(checkpoints=4096), solver))(THETA))
-    assert np.all(np.isfinite(replay)) and np.max(np.abs(replay)) > 0
-    np.testing.assert_allclose(replay, diffrax_rev, rtol=0, atol=1e-12 * np.max(np.abs(diffrax_rev)))
-
-
-def test_reverse_gradient_batched_equals_diffrax_adjoint_batched():
-    # Reference: diffrax's RecursiveCheckpointAdjoint under the same vmap (vmap must not mix the designs'
-    # step sequences). Against the unbatched gradients both differ by ~2e-5: batched arithmetic rounds
-    # differently, the controller takes other steps, and the discrete derivative moves within its error.
-    import diffrax as dfx
-
-    thetas = jnp.stack([THETA, THETA * jnp.asarray([1.0, 0.8, 0.5] + [1.0] * 8)])
-    replay = np.asarray(jax.vmap(jax.grad(lambda th: _hc_top(th, 1e-10, "reverse")))(thetas))
-    diffrax_rev = np.asarray(jax.vmap(jax.grad(lambda th: _hc_top(
-        th, 1e-10, dfx.RecursiveCheckpointAdjoint(checkpoints=4096))))(thetas))
-    assert np.max(np.abs(replay[0] - replay[1])) > 1e-3  # two different designs
-    np.testing.assert_allclose(replay, diffrax_rev, rtol=0, atol=1e-12 * np.max(np.abs(diffrax_rev)))
 
 
 def test_bad_options_raise_parameter_error():

@@ -1,0 +1,73 @@
+"""simulate_batch: the batch equals the individual solves, a failure stays in its design, the split over devices."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from _helpers import G, TIGHT
+from _helpers import mvg as _mvg
+
+from hertz_chain.analysis import analyse
+from hertz_chain.contact import HuntCrossley
+from hertz_chain.errors import ParameterError, SolverError
+from hertz_chain.simulate import simulate, simulate_batch
+from hertz_chain.stack import Stack, at_impact, stack_designs
+from hertz_chain.status import Status
+
+
+def test_batch_equals_individual_and_isolates_failure():
+    # Reference: vmap must reproduce the individual solves; a design needing more steps than max_steps
+    # (0.6 m gaps at 0.5 contact times per step) fails alone.
+    m = _mvg(3)
+    ks = [1e9, 3e8, 1e9]
+    gaps = [1e-4, 2e-4, 0.6]
+    grid = np.linspace(0.0, 1.2e-3, 25)
+    stacks = [Stack(m, HuntCrossley(k, 0.05), gravity=G) for k in ks]
+    states = [at_impact(s, 1.0, g) for s, g in zip(stacks, gaps)]
+    batch = simulate_batch(stack_designs(stacks), jax.tree.map(lambda *x: jnp.stack(x), *states),
+                           tolerances=TIGHT, max_steps=3000, ts=grid)
+    assert list(batch.ok) == [True, True, False]
+    assert batch.status[2] == Status.INCOMPLETE_MAX_STEPS
+    for i in range(2):
+        one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=3000, ts=grid)
+        # batched kernels round differently, so the step sequences drift apart: agreement is to the
+        # global error of the solve (~1e-9 at rtol = atol = 1e-11), not bitwise
+        assert abs(int(batch.num_steps[i]) - one.num_steps) <= 0.03 * one.num_steps
+        np.testing.assert_allclose(batch.launch_velocities[i], one.launch_velocities, rtol=1e-8)  # ~ global error
+        # dense output on a common grid (the step sequences drift apart by rounding of the controller)
+        np.testing.assert_allclose(batch.grid["velocities"][i], one.grid.velocities, rtol=0, atol=1e-8)
+        np.testing.assert_allclose(batch.design(i).grid.forces, one.grid.forces, rtol=1e-6)
+    with pytest.raises(SolverError, match="max_steps"):
+        simulate(stacks[2], states[2], tolerances=TIGHT, max_steps=3000)
+    # Without the step history (throughput mode) the launch data are unchanged: same reference.
+    lean = simulate_batch(stack_designs(stacks), jax.tree.map(lambda *x: jnp.stack(x), *states),
+                          tolerances=TIGHT, max_steps=3000, save_steps=False)
+    assert lean.steps is None and list(lean.ok) == [True, True, False]
+    for i in range(2):
+        one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=3000)
+        np.testing.assert_allclose(lean.launch_velocities[i], one.launch_velocities, rtol=1e-8)
+        np.testing.assert_allclose(lean.launch_times[i], one.launch_times, rtol=1e-7)
+        assert lean.design(i).steps is None
+    with pytest.raises(ParameterError, match="step history"):
+        analyse(lean.design(0))
+
+
+def test_batch_split_over_devices_equals_individual():
+    # Reference: individual solves. Five designs over the two CPU devices of conftest (shard_map, the
+    # last design repeated once to fill the second device, then dropped), with and without history.
+    assert jax.local_device_count() == 2
+    ratios = [0.3, 0.4, 0.5, 0.6, 0.7]
+    stacks = [Stack(r ** np.arange(3), HuntCrossley(1e9, 0.05), gravity=G) for r in ratios]
+    states = [at_impact(s, 1.0, 1e-4) for s in stacks]
+    xs = jax.tree.map(lambda *x: jnp.stack(x), *states)
+    for save in (True, False):
+        batch = simulate_batch(stack_designs(stacks), xs, tolerances=TIGHT, max_steps=3000, save_steps=save)
+        assert len(batch) == 5 and batch.ok.all()
+        for i in range(5):
+            one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=3000)
+            np.testing.assert_allclose(batch.launch_velocities[i], one.launch_velocities, rtol=1e-8)
+            # batched kernels round differently and the step sequences drift apart (module docstring)
+            assert abs(int(batch.num_steps[i]) - one.num_steps) <= 0.05 * one.num_steps
+            # the audit (~1e-11 here: the solver's truncation error) is kept while solving without the
+            # history, from the saved steps with it; batched rounding moves the steps, not the audit
+            assert batch.energy_error[i] == pytest.approx(one.energy_error, rel=1e-3)
