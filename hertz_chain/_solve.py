@@ -103,12 +103,13 @@ def _core(sol) -> dict:
     over, rebounds = c.cascade[0] > 0, c.cascade[1] > 0
     touched = jnp.any(c.rows[:, 0] >= 0)
     done = jnp.where(rebounds, Status.COMPLETE_WITH_REBOUNDS, Status.COMPLETE)
+    # the step budget running out is incomplete even after the cascade ended (with until="t_max": the
+    # rebounds up to t_max were asked for; the launch data are still those of the cascade)
     status = jnp.where(
-        (sol.result == dfx.RESULTS.event_occurred) | over, done,
-        jnp.where(sol.result == dfx.RESULTS.successful,
-                  jnp.where(touched, Status.INCOMPLETE_T_MAX, Status.NO_CONTACT),
-                  jnp.where(sol.result == dfx.RESULTS.max_steps_reached, Status.INCOMPLETE_MAX_STEPS,
-                            Status.FAILED)),
+        sol.result == dfx.RESULTS.max_steps_reached, Status.INCOMPLETE_MAX_STEPS,
+        jnp.where((sol.result == dfx.RESULTS.event_occurred) | over, done,
+                  jnp.where(sol.result == dfx.RESULTS.successful,
+                            jnp.where(touched, Status.INCOMPLETE_T_MAX, Status.NO_CONTACT), Status.FAILED)),
     )
     return dict(t_fin=sol.ts[-1][-1], y_fin=sol.ys[-1][-1], contacts=c, status=status,
                 num_steps=sol.stats["num_steps"], num_accepted_steps=sol.stats["num_accepted_steps"],

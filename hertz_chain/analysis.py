@@ -274,7 +274,8 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     v_ref = float(np.max(np.abs(v0)))
     e_meas = _main_restitution(episodes, n, v_ref)
     launch = np.asarray(sol.launch_velocities, dtype=float)
-    gains = launch / v_ref
+    # no drop speed (a stack released at rest): no gain is defined, the launch velocities still are
+    gains = launch / v_ref if v_ref > 0 else np.full(n, np.nan)
     ke0 = 0.5 * float(np.sum(m * v0**2))
     top_eff = 0.5 * m[-1] * launch[-1] ** 2 / ke0 if ke0 > 0 else float("nan")
     a_contact = a + g  # what an accelerometer on each mass reads
@@ -329,6 +330,9 @@ TOLERANCE_WARN = 1e-6
 def _warnings(sol, e_meas, e_nom, regime, tolerances) -> list[str]:
     """One line each: what a user should know before trusting the numbers."""
     out = []
+    if not np.max(np.abs(np.asarray(sol.state.velocities))) > 0:
+        out.append("the stack starts at rest: no drop speed, so no gain is defined; the launch velocities "
+                   "are in the JSON (launch_velocities_mps)")
     if np.isfinite(sol.energy_error) and sol.energy_error > ENERGY_WARN:
         out.append(f"energy audit: |E(t) - E(0)| reached {sol.energy_error:.2e} of the drop energy "
                    f"(> {ENERGY_WARN:g}): tighten solver.rtol/atol")

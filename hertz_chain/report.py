@@ -170,8 +170,8 @@ def _fmt(x, spec=".4f"):
 
 
 def _err(rigid, sim):
-    if rigid is None or sim is None or not (math.isfinite(rigid) and math.isfinite(sim)) or sim == 0:
-        return ""
+    if rigid is None or sim is None or not (math.isfinite(rigid) and math.isfinite(sim)) or sim <= 0:
+        return ""  # no comparison with an undefined or non-positive (partial) gain
     return f"  ({(rigid - sim) / sim:+.2%} vs Hertz)"
 
 
@@ -184,8 +184,10 @@ def summary_table(report: Report, title: str | None = None) -> str:
     lines.append(f"status: {r.status.text}   t_final = {_fmt(r.t_final * 1e3, '.4g')} ms   steps = "
                  f"{r.num_steps} ({r.num_rejected_steps} rejected)   energy error = {_fmt(r.energy_error, '.2e')}")
     if not r.status.ok:
-        lines.append(f"PARTIAL RESULTS ({r.status.text}): {r.status.hint()}; the gains below are not "
-                     "those of a finished cascade")
+        done = math.isfinite(r.cascade_end_time)
+        lines.append(f"PARTIAL RESULTS ({r.status.text}): {r.status.hint()}; "
+                     + ("the first cascade did end, so its gains below are final; the run after it is cut short"
+                        if done else "the gains below are not those of a finished cascade"))
     if math.isfinite(r.cascade_end_time):
         lines.append(f"first cascade ended at {r.cascade_end_time * 1e3:.4g} ms")
     lines.append(f"drop speed {r.drop_speed:.4g} m/s, {len(r.masses)} masses "
@@ -232,8 +234,9 @@ def summary_table(report: Report, title: str | None = None) -> str:
         lines.append(f"rebounds after the first cascade (kept out of the gains): {len(r.rebounds)}")
         for ep in r.rebounds[:10]:
             label = "ground-1" if ep.interface == 0 else f"{ep.interface}-{ep.interface + 1}"
-            lines.append(f"  t = {ep.start * 1e3:.4g} ms  {label:<9} approach {ep.approach_velocity:.4g} m/s, "
-                         f"separation {_fmt(ep.separation_velocity, '.4g')} m/s")
+            end = (f"separation {_fmt(ep.separation_velocity, '.4g')} m/s" if ep.complete
+                   else "still in contact at the end of the run")
+            lines.append(f"  t = {ep.start * 1e3:.4g} ms  {label:<9} approach {ep.approach_velocity:.4g} m/s, {end}")
         if len(r.rebounds) > 10:
             lines.append(f"  ... and {len(r.rebounds) - 10} more (--json lists them all)")
     for w in r.warnings:

@@ -61,11 +61,11 @@ class Status(enum.IntEnum):
             return "the cascade had not ended at t_max: raise solver.t_max (or leave it unset for the default)"
         if self is Status.INCOMPLETE_MAX_STEPS:
             now = "" if max_steps is None else f" (now {max_steps})"
-            return (f"the step budget ran out before the cascade ended: raise solver.max_steps{now} "
-                    "or loosen solver.rtol/atol")
+            return (f"the step budget ran out before the run's end (the cascade's end, or t_max with "
+                    f"until = \"t_max\"): raise solver.max_steps{now} or loosen solver.rtol/atol")
         if self is Status.NO_CONTACT:
-            return ("nothing touched before t_max: check the initial velocities and gaps (with gravity 0 "
-                    "something must move towards the ground or a neighbour)")
+            return ("nothing touched before t_max: check the initial velocities and gaps (something must move "
+                    "towards the ground or a neighbour, or gravity must bring it there)")
         if self is Status.FAILED:
             return ("the state became non-finite: check masses and contact parameters, and try tighter "
                     "tolerances or a smaller Tolerances.max_step")

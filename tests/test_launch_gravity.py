@@ -337,6 +337,13 @@ def test_issue_16_example_gain_and_until_t_max():
     assert long.gain == pytest.approx(sol.gain, rel=1e-9)
     assert long.cascade_end_time == pytest.approx(sol.cascade_end_time, rel=1e-12)
     assert long.t_final == pytest.approx(100 * sol.cascade_end_time, rel=1e-12)
+    # a step budget that covers the cascade but not the run to t_max: incomplete (the rebounds asked for
+    # are cut short), the cascade's launch still the same
+    short = _run(3, "tsuji", 0.05, until="t_max", t_max=100 * sol.cascade_end_time,
+                 max_steps=sol.num_steps + 500)
+    assert short.status == Status.INCOMPLETE_MAX_STEPS and not short.ok
+    assert short.cascade_end_time == pytest.approx(sol.cascade_end_time, rel=1e-12)
+    assert short.gain == pytest.approx(sol.gain, rel=1e-9)
 
 
 # ==================================================================== a run must actually run
