@@ -258,8 +258,8 @@ def simulate_rigid(
             j = int(np.flatnonzero(np.isnan(times))[0])
             raise fail(
                 f"rigid simulation: resting contact between mass {j} and mass {j + 1} under gravity at "
-                f"t = {t:.6g} s after {len(log)} impacts; the impulsive model cannot hold it: give them a "
-                "gap or a closing velocity"
+                f"t = {t:.6g} s after {len(log)} impacts (the lower masses have settled onto each other); "
+                "the impulsive model cannot hold a resting contact, so the run stops here"
             )
         dt = float(np.min(times))
         if not np.isfinite(dt) and not log:
