@@ -91,6 +91,7 @@ _EXPORTS = {
     "dropped": "stack",
     "resting": "stack",
     "stack_designs": "stack",
+    "simulate_file": "workflow",
     "StackSpec": "stackfile",
     "load_stack_file": "stackfile",
     "parse_stack": "stackfile",
@@ -191,4 +192,5 @@ if TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
     from .status import Status
     from .stack import Stack, State, at_impact, dropped, resting, stack_designs
     from .stackfile import StackSpec, load_stack_file, parse_stack
+    from .workflow import simulate_file
 

@@ -128,11 +128,11 @@ def design(
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
 ) -> None:
     """The optimal MVG design (Eqs 15, 20, 22-24) and the MET design (Eqs 25-30), compared."""
-    from . import report
+    from . import report, workflow
 
     try:
         _check_design_inputs(ratio, bottom_mass, top_mass, restitution)
-        result = report.design_report(ratio=ratio, m1=bottom_mass, mn=top_mass, e=restitution)
+        result = workflow.design_report(ratio=ratio, m1=bottom_mass, mn=top_mass, e=restitution)
     except HertzChainError as exc:
         _fail(str(exc))
     typer.echo(report.to_json(report.design_dict(result)) if as_json else report.design_table(result))
@@ -160,10 +160,10 @@ def simulate(
         spec = load_stack_file(stack_file)
     except HertzChainError as exc:
         _fail(str(exc))
-    from . import report
+    from . import report, workflow
 
     try:
-        result = report.run_spec(spec)
+        result = workflow.run_spec(spec)
     except SolverError as exc:
         typer.echo(f"hertz-chain: {Status.FAILED.text}: {_one_line(exc)}", err=True)
         raise typer.Exit(code=Status.FAILED.exit_code)
@@ -192,10 +192,10 @@ def simulate(
 @app.command()
 def demo() -> None:
     """The paper's optimal six-mass MVG stack (R = 0.012, e = 0.8): gapped, then touching."""
-    from . import report
+    from . import workflow
 
     try:
-        typer.echo(report.demo())
+        typer.echo(workflow.demo())
     except HertzChainError as exc:
         _fail(str(exc))
 

@@ -1,12 +1,10 @@
-"""Workflows and renderings behind the command line: run a stack file, and show a `Report` as a
-table, JSON, NetCDF (xarray, units in the attributes) or CSV.
+"""Renderings of a `Report` and of the rigid designs: a table, JSON, NetCDF (xarray, units in the
+attributes) or CSV. The workflows that produce them are `hertz_chain.workflow`.
 
-- `run_spec(spec)` / `simulate_file(path)`: stack file → `Built` → `simulate` → `analyse` → `Report`.
 - `summary_table(report)`, `to_dict(report)`, `to_json(report)`: what `hertz-chain simulate` prints.
 - `write_output(report, path)`: `.nc` (time histories and results as an `xarray.Dataset`) or `.csv`
   (the top mass's pulse).
-- `design_report(...)`, `design_table(...)`: the rigid MVG/MET designs of `hertz-chain design`.
-- `demo()`: the paper's optimal six-mass MVG stack, gapped and touching, against the rigid theory.
+- `design_dict(...)`, `design_table(...)`: the rigid MVG/MET designs of `hertz-chain design`.
 """
 
 from __future__ import annotations
@@ -14,58 +12,16 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from typing import TYPE_CHECKING
-
 from .constants import G0
-from .stackfile import StackSpec, load_stack_file
 
-if TYPE_CHECKING:  # the simulator stack (JAX) is imported only when a simulation runs
+if TYPE_CHECKING:
     from .analysis import Report
 
-__all__ = [
-    "run_spec",
-    "simulate_file",
-    "to_dict",
-    "to_json",
-    "summary_table",
-    "write_output",
-    "to_dataset",
-    "design_report",
-    "design_table",
-    "demo",
-]
-
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-
-
-# ------------------------------------------------------------------------------------------ running
-def run_spec(spec: StackSpec) -> Report:
-    """Build, simulate and analyse a stack spec. A dense output grid is added when the file asks
-    for one (`solver.n_output` / `solver.dt_output`)."""
-    from .analysis import analyse
-    from .build import build
-    from .simulate import simulate
-
-    built = build(spec)
-    options = dict(built.simulate_options, throw=False)  # the status says how it ended (partial results)
-    sol = simulate(built.stack, built.state, **options)
-    if built.n_output or built.dt_output:
-        if built.dt_output:
-            ts = np.arange(0.0, sol.t_final, built.dt_output)
-        else:
-            ts = np.linspace(0.0, sol.t_final, built.n_output)
-        sol = simulate(built.stack, built.state, ts=ts, **dict(options, t_max=sol.t_final))
-    tol = {k: built.simulate_options["tolerances"].__getattribute__(k) for k in ("rtol", "atol")} \
-        if built.simulate_options.get("tolerances") is not None else None
-    return analyse(sol, nominal_restitution=built.nominal_restitution, tolerances=tol)
-
-
-def simulate_file(path: str | Path) -> Report:
-    """Read, simulate and analyse a stack file."""
-    return run_spec(load_stack_file(path))
+__all__ = ["to_dict", "to_json", "summary_table", "write_output", "to_dataset", "design_dict", "design_table"]
 
 
 # ------------------------------------------------------------------------------------------ JSON
@@ -305,14 +261,6 @@ def write_output(report: Report, path: str | Path) -> None:
 
 
 # ------------------------------------------------------------------------------------------ design
-def design_report(*, ratio=None, m1=None, mn=None, e):
-    """The paper's optimal MVG and MET designs for (R, e), (R, m_1, e) or (m_1, m_n, e) (`rigid.design`)."""
-    from .errors import ParameterError
-    from .rigid import design
-
-    if ratio is None and (m1 is None or mn is None):
-        raise ParameterError("mass-ratio", ratio, "give --mass-ratio R, or both --bottom-mass and --top-mass")
-    return design(R=ratio, m1=m1, mn=mn, e=e)
 
 
 def _design_dict(d) -> dict:
@@ -352,26 +300,3 @@ def design_table(cmp) -> str:
              "",
              "MVG/MET ratios are the quantities of the paper's Figs 13 (G), 14 (K) and 15/18 (M)."]
     return "\n".join(lines)
-
-
-# ------------------------------------------------------------------------------------------ demo
-def demo() -> str:
-    """Simulate `examples/mvg6_gapped.toml` and `examples/mvg6_touching.toml` (the paper's optimal
-    six-mass MVG stack for R = 0.012, e = 0.8) and show how far each is from the rigid theory."""
-    out = []
-    reports = {}
-    for name in ("mvg6_gapped", "mvg6_touching"):
-        path = EXAMPLES / f"{name}.toml"
-        spec = load_stack_file(path)
-        reports[name] = rep = run_spec(spec)
-        out.append(summary_table(rep, title=f"{spec.title}  [{path.name}]"))
-        out.append("")
-    g, t = reports["mvg6_gapped"], reports["mvg6_touching"]
-    rigid = g.rigid.nominal_gain
-    out.append("Summary: rigid theory (paper Eq 20/19) predicts G = "
-               f"{rigid:.4f} for this stack.")
-    out.append(f"  gapped  : Hertz G = {g.top_velocity_gain:.4f} ({(g.top_velocity_gain - rigid) / rigid:+.2%}), "
-               f"regime {g.regime}")
-    out.append(f"  touching: Hertz G = {t.top_velocity_gain:.4f} ({(t.top_velocity_gain - rigid) / rigid:+.2%}), "
-               f"regime {t.regime}: a touching stack gets far less than the theory promises")
-    return "\n".join(out)

@@ -445,11 +445,12 @@ def _prepare(tmp_path: Path, argv: list) -> list:
 @pytest.mark.parametrize("build, fragments", [r[1:] for r in FLAG_ROWS], ids=[r[0] for r in FLAG_ROWS])
 def test_bad_flags(tmp_path, capsys, monkeypatch, build, fragments):
     import hertz_chain.report as report
+    import hertz_chain.workflow as workflow
 
     def no_run(*a, **k):  # bad input must be refused before anything is simulated
         raise AssertionError("simulated despite bad input")
 
-    monkeypatch.setattr(report, "run_spec", no_run)
+    monkeypatch.setattr(workflow, "run_spec", no_run)
     argv = _prepare(tmp_path, build(tmp_path))
     before = {p: p.read_text() for p in tmp_path.glob("exists.*")}
     code, out, err = run_main(argv, capsys)
@@ -613,8 +614,9 @@ def test_exit_status_after_a_run(tmp_path, capsys, monkeypatch, status):
     """After the table, a run that is not ok prints one line `hertz-chain: <status>: <hint>` and exits
     with `Status.exit_code`; each warning is one line too."""
     import hertz_chain.report as report
+    import hertz_chain.workflow as workflow
 
-    monkeypatch.setattr(report, "run_spec", lambda spec: _FakeReport(status, ["first\nwarning", "second"]))
+    monkeypatch.setattr(workflow, "run_spec", lambda spec: _FakeReport(status, ["first\nwarning", "second"]))
     monkeypatch.setattr(report, "summary_table", lambda r: "TABLE")
     stack = tmp_path / "ok.toml"
     stack.write_text(NORMATIVE_TEXT)
