@@ -13,7 +13,8 @@ and sizes"), and `NAME_MAX_FALLBACK` / `os.pathconf(..., "PC_NAME_MAX")` (hertz_
 
 from __future__ import annotations
 
-import copy
+from _helpers import DELETE
+from _helpers import patched as _patched
 import os
 import subprocess
 import sys
@@ -46,7 +47,6 @@ ROOT = Path(__file__).resolve().parents[1]
 NORMATIVE_TEXT = (ROOT / "examples" / "issue5_normative.toml").read_text(encoding="utf-8")
 NORMATIVE = tomllib.loads(NORMATIVE_TEXT)
 EXE = Path(sys.executable).with_name("hertz-chain")
-DELETE = object()
 M_LO, M_HI = LIMITS["mass"]
 V_HI = LIMITS["velocity"][1]
 L_HI = LIMITS["length"][1]
@@ -56,17 +56,7 @@ INF, NAN = float("inf"), float("nan")
 
 def patched(changes: dict) -> dict:
     """The normative example (issue #5) with dotted keys set (`DELETE` removes one)."""
-    data = copy.deepcopy(NORMATIVE)
-    for dotted, value in changes.items():
-        *parents, last = dotted.split(".")
-        node = data
-        for p in parents:
-            node = node.setdefault(p, {})
-        if value is DELETE:
-            node.pop(last, None)
-        else:
-            node[last] = value
-    return data
+    return _patched(NORMATIVE, changes)
 
 
 NO_V = {"drop.impact_velocity": DELETE}
@@ -444,7 +434,6 @@ def _prepare(tmp_path: Path, argv: list) -> list:
 
 @pytest.mark.parametrize("build, fragments", [r[1:] for r in FLAG_ROWS], ids=[r[0] for r in FLAG_ROWS])
 def test_bad_flags(tmp_path, capsys, monkeypatch, build, fragments):
-    import hertz_chain.report as report
     import hertz_chain.workflow as workflow
 
     def no_run(*a, **k):  # bad input must be refused before anything is simulated

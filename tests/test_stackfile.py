@@ -9,7 +9,8 @@ Floats are compared with a relative tolerance of 1e-12 (unit conversions multipl
 
 from __future__ import annotations
 
-import copy
+from _helpers import DELETE
+from _helpers import patched as _patched
 import dataclasses
 import math
 import subprocess
@@ -66,20 +67,9 @@ def base() -> dict:
 
 def patched(changes: dict) -> dict:
     """The normative example with dotted keys set (value `DELETE` removes the key)."""
-    data = copy.deepcopy(base())
-    for dotted, value in changes.items():
-        *parents, last = dotted.split(".")
-        node = data
-        for p in parents:
-            node = node.setdefault(p, {})
-        if value is DELETE:
-            node.pop(last, None)
-        else:
-            node[last] = value
-    return data
+    return _patched(base(), changes)
 
 
-DELETE = object()
 
 
 def error_of(data) -> str:
