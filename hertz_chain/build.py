@@ -32,7 +32,7 @@ from .materials import Material, contact_stiffness, material as lookup_material
 from .registry import LAWS
 from .rigid import cascade_velocities, met_design, met_mass_ratio, mvg_design
 from .simulate import Tolerances
-from .stack import Stack, State, at_impact, resting
+from .stack import Stack, State, at_impact, reduced_masses, resting
 from .stackfile import ContactSpec, StackSpec
 
 __all__ = ["Built", "build", "design_masses"]
@@ -171,7 +171,7 @@ def _build(spec: StackSpec) -> Built:
                                  f"{n}-mass stack (allowed 1..{n - 1})")
     v0 = np.asarray(spec.initial_velocities(n), dtype=float)
     specs = {j: spec.contact_for(j) for j in interfaces}
-    m_eff = np.concatenate([m[:1], m[:-1] * m[1:] / (m[:-1] + m[1:])])  # ground: m_1; pair j: reduced mass
+    m_eff = np.asarray(reduced_masses(m))  # ground: m_1; pair j: the pair's reduced mass
     stiffness = {j: _stiffness(spec, cs, j, n) for j, cs in specs.items()}
     e_nom = np.full(n, math.nan)
     for j, cs in specs.items():

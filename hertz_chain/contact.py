@@ -85,6 +85,20 @@ class AbstractContactLaw(eqx.Module):
             f = jnp.maximum(f, 0.0)
         return f
 
+    @classmethod
+    def dimensionless_damping(cls, restitution: float, *, chi_map: str = "exact", clamp: bool = True) -> float:
+        """The law's dimensionless damping for the restitution ``e`` (concrete; scipy, cached): the
+        number that, with the interface's stiffness, effective mass and calibration speed, fixes the
+        law's damping parameter (`from_dimensionless`). 0 for an elastic law."""
+        return 0.0
+
+    @classmethod
+    def from_dimensionless(cls, k, d, *, effective_mass, calibration_velocity, clamp: bool = True):
+        """The law from its stiffness ``k`` and dimensionless damping ``d`` (`dimensionless_damping`):
+        JAX-traceable and differentiable in every argument, so that a design's contacts follow its
+        masses (`hertz_chain.optimize`). ``calibration_velocity`` is used by the speed-dependent laws."""
+        raise NotImplementedError  # pragma: no cover
+
     def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
         """Coefficient of restitution of an isolated impact at ``impact_velocity`` (m/s).
 
@@ -131,6 +145,11 @@ class Hertz(_HertzianElastic):
         if restitution is not None and restitution != 1.0:
             raise ParameterError("restitution", restitution, "'hertz' is elastic (e = 1); use a damped law for e < 1")
         return cls(_stiffness(k), clamp)
+
+    @classmethod
+    def from_dimensionless(cls, k, d, *, effective_mass, calibration_velocity, clamp=True) -> "Hertz":
+        """``Hertz(k)`` (``d`` is 0)."""
+        return cls(k, clamp)
 
     def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
         """Always 1 (elastic)."""
@@ -189,6 +208,16 @@ class HuntCrossley(_HertzianElastic):
         v = _positive(_require(calibration_velocity, "calibration_velocity", cls.name), "calibration_velocity")
         return cls.from_restitution(k, restitution, v, chi_map, clamp)
 
+    @classmethod
+    def dimensionless_damping(cls, restitution, *, chi_map="exact", clamp=True) -> float:
+        """``chi(e)`` from the named map (`calibration.chi_from_restitution`)."""
+        return _cal.chi_from_restitution(restitution, chi_map)
+
+    @classmethod
+    def from_dimensionless(cls, k, d, *, effective_mass, calibration_velocity, clamp=True) -> "HuntCrossley":
+        """``alpha = chi / v_c``."""
+        return cls(k, d / calibration_velocity, clamp)
+
     def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
         """Exact ``e(chi = alpha v)``; independent of ``k``, ``m*`` and the clamp."""
         return _cal.hunt_crossley_restitution(np.asarray(self.alpha), _velocity(impact_velocity))
@@ -240,6 +269,16 @@ class Tsuji(_HertzianElastic):
             return cls(_stiffness(k), damping, m, clamp)
         return cls.from_restitution(k, restitution, m, clamp)
 
+    @classmethod
+    def dimensionless_damping(cls, restitution, *, chi_map="exact", clamp=True) -> float:
+        """``eta(e, clamp)`` (`calibration.tsuji_eta`)."""
+        return _cal.tsuji_eta(restitution, clamp)
+
+    @classmethod
+    def from_dimensionless(cls, k, d, *, effective_mass, calibration_velocity, clamp=True) -> "Tsuji":
+        """``Tsuji(k, eta = d, m_eff)``."""
+        return cls(k, d, effective_mass, clamp)
+
     def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
         """Restitution for ``eta`` (the same at every impact speed)."""
         v = _velocity(impact_velocity)
@@ -289,6 +328,16 @@ class KelvinVoigt(AbstractContactLaw):
             return cls(_stiffness(k), damping, clamp)
         m = _positive(_require(effective_mass, "effective_mass", cls.name), "effective_mass")
         return cls.from_restitution(k, restitution, m, clamp)
+
+    @classmethod
+    def dimensionless_damping(cls, restitution, *, chi_map="exact", clamp=True) -> float:
+        """``zeta(e, clamp)`` (`calibration.kelvin_voigt_damping_ratio`)."""
+        return _cal.kelvin_voigt_damping_ratio(restitution, clamp)
+
+    @classmethod
+    def from_dimensionless(cls, k, d, *, effective_mass, calibration_velocity, clamp=True) -> "KelvinVoigt":
+        """``c = 2 zeta sqrt(m_eff k)``."""
+        return cls(k, 2.0 * d * jnp.sqrt(effective_mass * k), clamp)
 
     def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
         """Restitution for ``zeta = c / (2 sqrt(m_eff k))`` (the same at every impact speed)."""
@@ -356,6 +405,16 @@ class Viscoelastic(_HertzianElastic):
         m = _positive(_require(effective_mass, "effective_mass", cls.name), "effective_mass")
         v = _positive(_require(calibration_velocity, "calibration_velocity", cls.name), "calibration_velocity")
         return cls.from_restitution(k, restitution, m, v, clamp)
+
+    @classmethod
+    def dimensionless_damping(cls, restitution, *, chi_map="exact", clamp=True) -> float:
+        """``xi(e, clamp)`` (`calibration.viscoelastic_xi`)."""
+        return _cal.viscoelastic_xi(restitution, clamp)
+
+    @classmethod
+    def from_dimensionless(cls, k, d, *, effective_mass, calibration_velocity, clamp=True) -> "Viscoelastic":
+        """``A = xi / ((3/2) (k/m_eff)^{2/5} v_c^{1/5})`` (Ramírez et al. 1999)."""
+        return cls(k, d / (1.5 * (k / effective_mass) ** 0.4 * calibration_velocity**0.2), clamp)
 
     def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
         """``e(xi)`` with ``xi = (3/2) A (k/m_eff)^{2/5} v^{1/5}``; falls as ``v`` rises."""

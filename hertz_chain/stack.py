@@ -44,8 +44,18 @@ __all__ = [
     "resting",
     "stack_designs",
     "invert_monotone",
+    "reduced_masses",
 ]
 
+
+
+def reduced_masses(masses: ArrayLike) -> Array:
+    """`(..., n)` reduced (effective) mass of every interface of a stack with masses `(..., n)`: entry 0
+    is the ground's, `m_1` (the ground is immovable), entry j is `m_j m_{j+1}/(m_j + m_{j+1})`.
+    JAX-traceable; the one home of this formula."""
+    m = jnp.asarray(masses, dtype=float)
+    pair = m[..., :-1] * m[..., 1:] / (m[..., :-1] + m[..., 1:])
+    return jnp.concatenate([m[..., :1], pair], axis=-1)
 
 
 def _is_concrete(*xs) -> bool:
@@ -159,10 +169,8 @@ class Stack(eqx.Module):
         return tuple(range(0 if self.ground else 1, self.n))
 
     def effective_masses(self) -> Array:
-        """`(n,)` reduced mass of every interface: `m_1` for the ground, `m_j m_{j+1}/(m_j + m_{j+1})`."""
-        m = self.masses
-        pair = m[:-1] * m[1:] / (m[:-1] + m[1:])
-        return jnp.concatenate([m[:1], pair])
+        """`(n,)` reduced mass of every interface (`reduced_masses`)."""
+        return reduced_masses(self.masses)
 
     def interface_mask(self) -> Array:
         """`(n,)` booleans: which interfaces exist (entry 0 is False without the ground)."""

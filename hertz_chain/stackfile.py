@@ -99,13 +99,14 @@ LIMITS = {
     "linear_stiffness": (0.0, 1e15),
     "viscous_damping": (0.0, 1e9),
     "inverse_velocity": (0.0, 1e6),
+    "force": (0.0, 1e12),
 }
 """Dimension -> (smallest non-zero magnitude, largest magnitude), SI. A magnitude outside is an error
 naming the key; 0 is left to each key's own sign rule (a mass must still be > 0)."""
 
 _UNITS = {"mass": "kg", "length": "m", "time": "s", "velocity": "m/s", "acceleration": "m/s^2",
           "pressure": "Pa", "density": "kg/m^3", "hertz_stiffness": "N/m^1.5", "linear_stiffness": "N/m",
-          "viscous_damping": "N s/m", "inverse_velocity": "s/m"}
+          "viscous_damping": "N s/m", "inverse_velocity": "s/m", "force": "N"}
 
 # the vocabularies: one table each in `hertz_chain.registry`
 CONTACT_LAWS = tuple(LAWS)
@@ -119,7 +120,8 @@ DAMPING_LIMITS = {name: (row.damping_max, f" {_UNITS[row.damping_dimension]}" if
 DESIGN_KINDS = ("mvg", "met")
 SHAPES = ("sphere", "flat")
 
-_TOP_KEYS = ("title", "drop", "stack", "ground", "contact", "materials", "solver")
+_TOP_KEYS = ("title", "drop", "stack", "ground", "contact", "materials", "solver", "optimize")
+# `optimize` is read by `hertz_chain.optimize` (docs/optimize.md); simulating such a file runs its starting stack
 _DROP_KEYS = ("ground", "impact_velocity", "height", "gravity")
 _STACK_KEYS = ("masses", "design", "gaps", "velocities", "preload", "material", "radius", "shape")
 _DESIGN_KEYS = ("kind", "n", "restitution", "bottom_mass", "top_mass", "mass_ratio")
@@ -147,6 +149,7 @@ _DIMENSIONS = {
     "time": ("s", "a time (e.g. '1 us')"),
     "velocity": ("m/s", "a velocity (e.g. '1 m/s')"),
     "acceleration": ("m/s^2", "an acceleration (e.g. '9.81 m/s^2')"),
+    "force": ("N", "a force (e.g. '10 kN')"),
     "pressure": ("Pa", "a pressure (e.g. '200 GPa')"),
     "density": ("kg/m^3", "a density (e.g. '7850 kg/m^3')"),
     "hertz_stiffness": ("N/m^1.5", "a Hertzian stiffness in N/m^1.5 (e.g. '1e9 N/m^1.5')"),

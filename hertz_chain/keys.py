@@ -1,0 +1,120 @@
+"""The key vocabulary: how a stack-file key and an index name one number of a design.
+
+Stack files, `[[optimize.vary]]` (`hertz_chain.optimize`) and, later, sweep axes and `--set KEY=VALUE`
+name a parameter the same way: a dotted stack-file key and, for the per-body keys, an index
+
+- `stack.masses`: mass numbers, 1 at the bottom to n at the top;
+- `stack.gaps`: gap numbers, gap j between mass j and mass j+1 (1..n-1);
+- `contact.stiffness`, `contact.restitution`: interface numbers, 0 = ground–mass 1, j = mass j – mass
+  j+1 (a per-interface override, as `[[contact.interface]]` and `[contact.ground]` are in a file);
+- `drop.impact_velocity`, `drop.height`: no index.
+
+`KEYS` is the table (one row per key: its dimension, what its index counts, whether the search runs
+in log space); `resolve` turns a key and an index into `Slot`s and refuses, in one line naming the
+key, the value and what is allowed, an unknown key or an index out of range. Plain Python: the
+command line reads it while checking a file, before JAX is imported.
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass
+
+from .errors import StackFileError
+
+__all__ = ["KeyRow", "KEYS", "Slot", "resolve"]
+
+
+@dataclass(frozen=True)
+class KeyRow:
+    """One numeric stack-file key that a design may vary.
+
+    `dimension`: a `stackfile` dimension name (`"stiffness"`: the interface's law decides, N/m^1.5 or
+    N/m); `over`: what its index counts (`"mass"`, `"gap"`, `"interface"`, or `None` for a scalar);
+    `log`: searched in log space (a positive scale quantity spanning decades); `lower`: the smallest
+    value allowed (exclusive when `positive`)."""
+
+    key: str
+    dimension: str
+    over: str | None
+    log: bool = False
+    positive: bool = True
+    upper: float | None = None
+
+
+KEYS: dict[str, KeyRow] = {row.key: row for row in (
+    KeyRow("stack.masses", "mass", "mass", log=True),
+    KeyRow("stack.gaps", "length", "gap", positive=False),
+    KeyRow("contact.stiffness", "stiffness", "interface", log=True),
+    KeyRow("contact.restitution", "dimensionless", "interface", upper=1.0),
+    KeyRow("drop.impact_velocity", "velocity", None),
+    KeyRow("drop.height", "length", None),
+)}
+"""The keys a design may vary, by dotted name (see `KeyRow`)."""
+
+
+@dataclass(frozen=True, order=True)
+class Slot:
+    """One number of a design: `key` and `index` (None for a scalar key), as in `KEYS`."""
+
+    key: str
+    index: int | None = None
+
+    @property
+    def position(self) -> int | None:
+        """The 0-based position in the key's array: mass and gap numbers count from 1, interfaces from
+        0 (the ground)."""
+        if self.index is None:
+            return None
+        return self.index if KEYS[self.key].over == "interface" else self.index - 1
+
+    @property
+    def label(self) -> str:
+        """`stack.masses[2]`, `drop.impact_velocity`."""
+        return self.key if self.index is None else f"{self.key}[{self.index}]"
+
+
+def _allowed(over: str, n: int, ground: bool) -> range:
+    if over == "mass":
+        return range(1, n + 1)
+    if over == "gap":
+        return range(1, n)
+    return range(0 if ground else 1, n)
+
+
+def resolve(key: object, index: object, *, n: int, ground: bool, where: str = "key",
+            default: tuple[int, ...] | None = None) -> tuple[Slot, ...]:
+    """The slots named by `key` and `index` in a stack of `n` masses (with or without the ground).
+
+    **Arguments:** `key`, a name of `KEYS`; `index`, an int, a list of ints or None (every entry, or
+    `default` when given); `where`, the dotted path for messages.
+
+    **Returns** a tuple of `Slot`s, in the order given. **Raises** `StackFileError` (one line) for an
+    unknown key, an index on a scalar key, an index out of range or repeated.
+    """
+    if not isinstance(key, str) or key not in KEYS:
+        close = difflib.get_close_matches(str(key), list(KEYS), n=1, cutoff=0.6)
+        hint = f"did you mean '{close[0]}'?" if close else f"allowed: {', '.join(KEYS)}"
+        raise StackFileError(f"{where}: {key!r} is not a key a design can vary; {hint}")
+    row = KEYS[key]
+    if row.over is None:
+        if index is not None:
+            raise StackFileError(f"{where}: {key} is a single number; give no index")
+        return (Slot(key),)
+    allowed = _allowed(row.over, n, ground)
+    if index is None:
+        index = list(default) if default is not None else list(allowed)
+    items = index if isinstance(index, list) else [index]
+    if not items:
+        raise StackFileError(f"{where}.index: empty; give {row.over} numbers {allowed.start}..{allowed.stop - 1}")
+    seen = []
+    for i in items:
+        if isinstance(i, bool) or not isinstance(i, int) or i not in allowed:
+            what = f"{row.over} numbers {allowed.start}..{allowed.stop - 1}" if len(allowed) else f"no {row.over}s"
+            extra = " (interface 0 is the ground, which this stack has not)" if row.over == "interface" and i == 0 else ""
+            raise StackFileError(f"{where}.index: {i!r} is out of range for {key} of this {n}-mass stack; "
+                                 f"allowed: {what}{extra}")
+        if i in seen:
+            raise StackFileError(f"{where}.index: {i} is given twice")
+        seen.append(i)
+    return tuple(Slot(key, i) for i in seen)

@@ -1,0 +1,733 @@
+"""Design by the compliant model: the stack that maximises the launch gain, or that gives a target pulse.
+
+`optimize(path)` reads a stack file with an `[optimize]` section (docs/optimize.md), searches the
+design space it names with the compliant simulator, and returns an `OptimizeResult`: the best stack,
+its exact analysis, the starting stack's, the paper's MVG and MET designs for the same end masses
+simulated under the same contacts, and how the search converged. `OptimizeResult.document()` is the
+optimum as a stack file (without `[optimize]`) that `hertz-chain simulate` runs and that reproduces the
+reported numbers (they are computed from it).
+
+**Variables.** `[[optimize.vary]]` names stack-file keys by the key vocabulary of `hertz_chain.keys`
+(`stack.masses` by mass number, `stack.gaps` by gap number, `contact.stiffness`/`contact.restitution`
+by interface number with 0 = ground, `drop.impact_velocity`, `drop.height`), each with bounds in
+units. The search runs on `u` in the unit box: `x = lo (hi/lo)^u` for the scale keys (masses,
+stiffnesses: `keys.KeyRow.log`), `x = lo + u (hi - lo)` otherwise. With `n = [...]`, every number of
+masses is optimised from masses spaced geometrically between the file's end masses, and the best wins.
+
+**Methods.**
+
+- *Launch gain* (no peak limit): gradients of the top launch velocity by the replayed reverse mode of
+  `simulate.launch_velocity` through the differentiable design map (`hertz_chain._design`), and scipy's
+  bounded quasi-Newton L-BFGS-B (SLSQP when a total-mass budget adds a linear constraint). Not
+  optimistix: its quasi-Newton methods are unconstrained, and a reparametrisation onto the box can only
+  approach a bound, while touching stacks often have their optimum on one.
+- *Pulse targets and peak limits* (`objective = "pulse"`, `max_peak_g`, `max_peak_force`): the peak
+  and the duration of a pulse are a maximum and level crossings over the history, not smooth functions
+  of the design; the search uses the exact post-processor (`pulse.pulse_metrics` on the solver's steps)
+  with scipy's derivative-free, bound- and constraint-aware COBYQA (Ragonneau & Zhang 2023).
+- *Global*: a scrambled Sobol pre-screen (`scipy.stats.qmc`, seeded) of `screen` designs evaluated in
+  one compiled, vmapped `simulate_batch`; the best `starts - 1` of them and the file's own stack start
+  the local searches. The result says whether the starts agree.
+
+Raises `StackFileError` (one line naming the key, the value and what is allowed) for a bad
+`[optimize]` section: an unknown key to vary, an index out of range, bounds in the wrong order or units,
+an infeasible mass budget.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import StackFileError
+from .keys import KEYS, Slot, resolve
+from .stackfile import StackSpec, parse_quantity, parse_stack
+
+__all__ = ["OptimizeStatus", "OptimizeSpec", "VarySpec", "OptimizeResult", "optimize", "read_optimize_file",
+           "OBJECTIVES"]
+
+OBJECTIVES = ("gain", "pulse")
+"""`gain`: maximise the top mass's launch gain; `pulse`: hit a target top pulse (peak g and duration)."""
+
+DURATIONS = ("half-sine", "10%")
+"""How a pulse's duration is read: the equivalent half-sine duration `pi dV / (2 peak)`, or between the
+10 % points (`hertz_chain.pulse`)."""
+
+_OPTIMIZE_KEYS = ("objective", "n", "starts", "screen", "seed", "max_iterations", "total_mass", "fix_ends",
+                  "max_peak_g", "max_peak_force", "target_peak_g", "target_duration", "duration", "vary")
+_VARY_KEYS = ("key", "index", "bounds")
+MAX_STARTS = 64
+MAX_SCREEN = 4096
+
+
+class OptimizeStatus(enum.IntEnum):
+    """How a search ended; `exit_code` is the command line's."""
+
+    CONVERGED = 0
+    NOT_CONVERGED = 1
+    FAILED = 2
+
+    @property
+    def text(self) -> str:
+        return {0: "converged", 1: "not converged", 2: "failed"}[int(self)]
+
+    @property
+    def exit_code(self) -> int:
+        return {0: 0, 1: 3, 2: 5}[int(self)]
+
+    @property
+    def ok(self) -> bool:
+        return self is OptimizeStatus.CONVERGED
+
+
+@dataclasses.dataclass(frozen=True)
+class VarySpec:
+    """One `[[optimize.vary]]` entry: `key`, `index` (as written; None = the default indices) and the
+    bounds in SI units."""
+
+    key: str
+    index: Any
+    bounds: tuple[float, float]
+    where: str
+
+
+@dataclasses.dataclass(frozen=True)
+class OptimizeSpec:
+    """The `[optimize]` section, validated, in SI units (docs/optimize.md)."""
+
+    objective: str = "gain"
+    vary: tuple[VarySpec, ...] = ()
+    n: tuple[int, ...] | None = None
+    starts: int = 4
+    screen: int = 64
+    seed: int = 0
+    max_iterations: int = 200
+    total_mass: float | None = None
+    fix_ends: bool = True
+    max_peak_g: float | None = None
+    max_peak_force: float | None = None
+    target_peak_g: float | None = None
+    target_duration: float | None = None
+    duration: str = "half-sine"
+
+    @property
+    def needs_pulse(self) -> bool:
+        return self.objective == "pulse" or self.max_peak_g is not None or self.max_peak_force is not None
+
+
+# ------------------------------------------------------------------------------------------ parsing
+def _err(key: str, problem: str) -> StackFileError:
+    return StackFileError(f"{key}: {problem}")
+
+
+def _int(raw, key, lo, hi) -> int:
+    if isinstance(raw, bool) or not isinstance(raw, int) or not lo <= raw <= hi:
+        raise _err(key, f"{raw!r} is invalid: an integer from {lo} to {hi}")
+    return raw
+
+
+def _positive(raw, key, dim) -> float:
+    value = parse_quantity(raw, dim, key)
+    if not (math.isfinite(value) and value > 0):
+        raise _err(key, f"{raw!r} is invalid: must be > 0")
+    return value
+
+
+def _stiffness_dimension(spec: StackSpec, j: int) -> str:
+    from .registry import LAWS
+
+    return LAWS[spec.contact_for(j).law].stiffness
+
+
+def parse_optimize(raw: Any, spec: StackSpec) -> OptimizeSpec:
+    """Validate an `[optimize]` table against the stack file `spec` (see docs/optimize.md)."""
+    from .constants import MAX_MASSES
+
+    if not isinstance(raw, dict):
+        raise _err("optimize", f"expected a table ([optimize]), got {raw!r}")
+    for k in raw:
+        if k not in _OPTIMIZE_KEYS:
+            import difflib
+
+            close = difflib.get_close_matches(str(k), _OPTIMIZE_KEYS, n=1, cutoff=0.6)
+            raise _err(f"optimize.{k}", "unknown key; " + (f"did you mean '{close[0]}'?" if close else
+                                                          f"allowed: {', '.join(_OPTIMIZE_KEYS)}"))
+    out: dict[str, Any] = {}
+    objective = raw.get("objective", "gain")
+    if objective not in OBJECTIVES:
+        raise _err("optimize.objective", f"{objective!r} is invalid; allowed: {', '.join(OBJECTIVES)}")
+    out["objective"] = objective
+    if "n" in raw:
+        ns = raw["n"] if isinstance(raw["n"], list) else [raw["n"]]
+        if not ns:
+            raise _err("optimize.n", "empty; give numbers of masses, e.g. n = [4, 8]")
+        lo = 2 if spec.has_ground else 3
+        out["n"] = tuple(_int(v, "optimize.n", lo, MAX_MASSES) for v in ns)
+        if len(set(out["n"])) != len(out["n"]):
+            raise _err("optimize.n", f"{ns!r} repeats a number of masses")
+        for key in ("radius", "material", "shape"):
+            if isinstance(getattr(spec.stack, key), tuple):
+                raise _err("optimize.n", f"stack.{key} is given per mass; with optimize.n give one value for all")
+        if spec.stack.velocities is not None:
+            raise _err("optimize.n", "a chain started from stack.velocities has a fixed number of masses")
+        if spec.contact.overrides:
+            raise _err("optimize.n", "[[contact.interface]] overrides name interfaces of one stack; "
+                       "with optimize.n use [contact] (and [contact.ground]) only")
+    for key, lo, hi in (("starts", 1, MAX_STARTS), ("screen", 0, MAX_SCREEN), ("seed", 0, 2**31 - 1),
+                        ("max_iterations", 1, 100_000)):
+        if key in raw:
+            out[key] = _int(raw[key], f"optimize.{key}", lo, hi)
+    if "fix_ends" in raw:
+        if not isinstance(raw["fix_ends"], bool):
+            raise _err("optimize.fix_ends", f"{raw['fix_ends']!r} is invalid: true or false")
+        out["fix_ends"] = raw["fix_ends"]
+    if "total_mass" in raw:
+        out["total_mass"] = _positive(raw["total_mass"], "optimize.total_mass", "mass")
+    if "max_peak_force" in raw:
+        out["max_peak_force"] = _positive(raw["max_peak_force"], "optimize.max_peak_force", "force")
+    for key in ("max_peak_g", "target_peak_g"):
+        if key in raw:
+            out[key] = _positive(raw[key], f"optimize.{key}", "dimensionless")
+    if "target_duration" in raw:
+        out["target_duration"] = _positive(raw["target_duration"], "optimize.target_duration", "time")
+    if "duration" in raw:
+        if raw["duration"] not in DURATIONS:
+            raise _err("optimize.duration", f"{raw['duration']!r} is invalid; allowed: {', '.join(DURATIONS)}")
+        out["duration"] = raw["duration"]
+    if objective == "pulse":
+        for key in ("target_peak_g", "target_duration"):
+            if key not in out:
+                raise _err(f"optimize.{key}", "missing; objective = 'pulse' needs target_peak_g and target_duration")
+    else:
+        for key in ("target_peak_g", "target_duration", "duration"):
+            if key in raw:
+                raise _err(f"optimize.{key}", "used only with objective = 'pulse'")
+    vary = raw.get("vary")
+    if not isinstance(vary, list) or not vary:
+        raise _err("optimize.vary", "missing; give at least one [[optimize.vary]] with a key and bounds")
+    entries = []
+    for i, item in enumerate(vary):
+        where = f"optimize.vary[{i}]"
+        if not isinstance(item, dict):
+            raise _err(where, f"expected a table, got {item!r}")
+        for k in item:
+            if k not in _VARY_KEYS:
+                raise _err(f"{where}.{k}", f"unknown key; allowed: {', '.join(_VARY_KEYS)}")
+        if "key" not in item:
+            raise _err(f"{where}.key", "missing; the stack-file key to vary, e.g. 'stack.masses'")
+        key = item["key"]
+        resolve(key, None, n=3, ground=True, where=f"{where}.key")  # known key (indices checked per n)
+        row = KEYS[key]
+        bounds = item.get("bounds")
+        if not isinstance(bounds, list) or len(bounds) != 2:
+            raise _err(f"{where}.bounds", f"{bounds!r} is invalid: two values [lower, upper] with units")
+        dim = row.dimension
+        if dim == "stiffness":
+            idx = item.get("index")
+            dims = {_stiffness_dimension(spec, j) for j in (idx if isinstance(idx, list) else [idx])
+                    if isinstance(j, int) and not isinstance(j, bool)} or {"hertz_stiffness"}
+            dim = dims.pop() if len(dims) == 1 else "hertz_stiffness"
+        lo, hi = (parse_quantity(b, dim, f"{where}.bounds") for b in bounds)
+        if not (math.isfinite(lo) and math.isfinite(hi)) or not lo < hi:
+            raise _err(f"{where}.bounds", f"{bounds!r} is invalid: the lower bound must be below the upper")
+        if (row.positive and lo <= 0) or lo < 0:
+            raise _err(f"{where}.bounds", f"{bounds!r} is invalid: {key} must be {'> 0' if row.positive else '>= 0'}")
+        if row.upper is not None and hi > row.upper:
+            raise _err(f"{where}.bounds", f"{bounds!r} is invalid: {key} is at most {row.upper:g}")
+        if out.get("n") and "index" in item and row.over in ("mass", "gap"):
+            raise _err(f"{where}.index", "with optimize.n give no index: the interior masses (or every gap) vary")
+        entries.append(VarySpec(key, item.get("index"), (lo, hi), where))
+    keys = [e.key for e in entries]
+    for key in set(keys):
+        if keys.count(key) > 1 and any(e.index is None for e in entries if e.key == key):
+            raise _err("optimize.vary", f"{key} is varied twice; give disjoint index lists")
+    out["vary"] = tuple(entries)
+    return OptimizeSpec(**out)
+
+
+def read_optimize_file(path: str | Path) -> tuple[StackSpec, OptimizeSpec, dict]:
+    """Read a stack file with an `[optimize]` section: `(spec, problem, document)`; `document` is the
+    parsed TOML without `[optimize]` (what `--write` starts from). Raises `StackFileError`."""
+    import tomllib
+
+    from .stackfile import load_stack_file
+
+    spec = load_stack_file(path)  # every check of an ordinary stack file, with the file name
+    doc = tomllib.loads(Path(path).read_text(encoding="utf-8-sig"))
+    if "optimize" not in doc:
+        raise StackFileError(f"{path}: optimize: missing; give an [optimize] section (docs/optimize.md)")
+    raw = doc.pop("optimize")
+    try:
+        problem = parse_optimize(raw, spec)
+    except StackFileError as exc:
+        raise StackFileError(f"{path}: {exc}") from None
+    return spec, problem, doc
+
+
+# ------------------------------------------------------------------------------------------ one n
+@dataclasses.dataclass
+class _Space:
+    """The search space of one number of masses: the design map, the slots and their bounds."""
+
+    n: int
+    spec: StackSpec
+    doc: dict
+    slots: tuple[Slot, ...]
+    lo: np.ndarray
+    hi: np.ndarray
+    log: np.ndarray
+    dm: Any
+
+    def to_x(self, u):
+        import jax.numpy as jnp
+
+        u = jnp.clip(u, 0.0, 1.0)
+        lin = self.lo + u * (self.hi - self.lo)
+        lg = self.lo * (self.hi / self.lo) ** u if np.all(self.lo[self.log] > 0) else lin
+        return jnp.where(self.log, lg, lin)
+
+    def to_u(self, x) -> np.ndarray:
+        x = np.clip(np.asarray(x, dtype=float), self.lo, self.hi)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lg = np.log(x / self.lo) / np.log(self.hi / self.lo)
+        return np.clip(np.where(self.log, lg, (x - self.lo) / (self.hi - self.lo)), 0.0, 1.0)
+
+
+def _start_masses(spec: StackSpec, n: int) -> np.ndarray:
+    from .build import design_masses
+
+    m = design_masses(spec)
+    if n == m.size:
+        return m
+    return m[0] * (m[-1] / m[0]) ** (np.arange(n) / (n - 1))
+
+
+def _space(spec: StackSpec, doc: dict, problem: OptimizeSpec, n: int) -> _Space:
+    from ._design import DesignMap, with_masses
+
+    spec_n = with_masses(spec, _start_masses(spec, n))
+    ground = spec.has_ground
+    slots, lo, hi = [], [], []
+    for v in problem.vary:
+        default = None
+        if v.key == "stack.masses" and problem.fix_ends:
+            default = tuple(range(2, n))
+            if not default:
+                raise _err(f"{v.where}.key", f"a {n}-mass stack has no interior mass to vary with fix_ends = true")
+        got = resolve(v.key, v.index, n=n, ground=ground, where=v.where, default=default)
+        if v.key == "stack.masses" and problem.fix_ends:
+            ends = [s.index for s in got if s.index in (1, n)]
+            if ends:
+                raise _err(f"{v.where}.index", f"mass {ends[0]} is an end mass, held fixed (fix_ends = true, as in "
+                           "the paper); set optimize.fix_ends = false to vary it")
+        for s in got:
+            if s in slots:
+                raise _err(f"{v.where}.index", f"{s.label} is varied twice")
+            slots.append(s)
+            lo.append(v.bounds[0])
+            hi.append(v.bounds[1])
+    slots = tuple(slots)
+    dm = DesignMap(spec_n, slots)
+    log = np.array([KEYS[s.key].log for s in slots])
+    lo_a, hi_a = np.array(lo), np.array(hi)
+    if problem.total_mass is not None:
+        m = np.asarray(dm.base["stack.masses"], dtype=float).copy()
+        for s, low in zip(slots, lo_a):
+            if s.key == "stack.masses":
+                m[s.position] = low
+        if m.sum() > problem.total_mass:
+            raise _err("optimize.total_mass", f"{problem.total_mass:g} kg is infeasible for n = {n}: the fixed "
+                       f"masses and the lower bounds of the varied ones already weigh {m.sum():.6g} kg")
+    return _Space(n, spec_n, doc, slots, lo_a, hi_a, log, dm)
+
+
+# ------------------------------------------------------------------------------------------ objectives
+class _Evaluator:
+    """The objective and constraints of one `_Space`, compiled once and reused for every start."""
+
+    def __init__(self, space: _Space, problem: OptimizeSpec):
+        import jax
+
+        self.space, self.problem = space, problem
+        self.count = 0
+        self.g = space.dm.gravity
+        if not problem.needs_pulse:
+            from .simulate import launch_velocity
+
+            def neg_gain(u):
+                x = space.to_x(u)
+                stack, state = space.dm(x)
+                return -launch_velocity(stack, state)[-1] / space.dm.drop_speed(x)
+
+            self._vg = jax.jit(jax.value_and_grad(neg_gain))
+        self._mass = jax.jit(jax.value_and_grad(lambda u: self._total_mass(u)))
+
+    def _total_mass(self, u):
+        return self.space.dm.fields(self.space.to_x(u))["stack.masses"].sum()
+
+    # gradient path -----------------------------------------------------------------------
+    def value_and_grad(self, u):
+        self.count += 1
+        u = np.asarray(u, dtype=float)
+        try:
+            v, g = self._vg(u)
+            v, g = float(v), np.asarray(g, dtype=float)
+        except Exception:  # a design the solver cannot finish: a large value, no slope (the line search backs off)
+            v, g = 1e3, np.zeros(len(u))
+        if not (math.isfinite(v) and np.all(np.isfinite(g))):
+            v, g = 1e3, np.zeros(len(u))
+        self.last = (u.copy(), v)
+        return v, g
+
+    # exact path ----------------------------------------------------------------------------
+    def metrics(self, u) -> dict:
+        """The exact metrics of the design at `u` from one solve with its step history."""
+        from .pulse import pulse_metrics
+        from .simulate import simulate
+
+        self.count += 1
+        x = np.asarray(self.space.to_x(np.asarray(u, dtype=float)))
+        stack, state = self.space.dm(x)
+        opts = dict(self.space.dm.built.simulate_options, throw=False)
+        sol = simulate(stack, state, **opts)
+        out = {"ok": sol.status.ok, "gain": float(sol.launch_velocities[-1]) / float(self.space.dm.drop_speed(x))}
+        st = sol.steps
+        if st is None or not sol.status.ok:
+            return out | {"ok": False}
+        keep = np.isfinite(st.t)
+        if np.isfinite(sol.cascade_end_time):
+            keep &= st.t <= sol.cascade_end_time
+        t = st.t[keep]
+        a = st.accelerations[keep, -1] + self.g
+        v = st.velocities[keep, -1] + self.g * t
+        try:
+            pm = pulse_metrics(t, a, velocity=v)
+        except Exception:
+            return out | {"ok": False}
+        dur = pm.equivalent_half_sine_duration if self.problem.duration == "half-sine" else pm.duration_10
+        out.update(peak_g=pm.peak / 9.80665, duration=dur, peak_force=float(np.max(st.forces[keep])))
+        return out
+
+    def pulse_objective(self, u) -> float:
+        p = self.problem
+        mt = self.metrics(u)
+        if not mt["ok"]:
+            return 1e3
+        if p.objective == "pulse":
+            return (mt["peak_g"] / p.target_peak_g - 1.0) ** 2 + (mt["duration"] / p.target_duration - 1.0) ** 2
+        return -mt["gain"]
+
+    def pulse_constraints(self, u) -> np.ndarray:
+        """Constraint values >= 0 where feasible (relative margins)."""
+        p = self.problem
+        mt = self.metrics(u)
+        out = []
+        if p.max_peak_g is not None:
+            out.append(1.0 - mt.get("peak_g", math.inf) / p.max_peak_g if mt["ok"] else -1.0)
+        if p.max_peak_force is not None:
+            out.append(1.0 - mt.get("peak_force", math.inf) / p.max_peak_force if mt["ok"] else -1.0)
+        return np.array(out)
+
+
+def _screen(space: _Space, ev: _Evaluator, problem: OptimizeSpec) -> np.ndarray:
+    """The Sobol pre-screen: the unit-box points sorted best first (one batched, compiled solve)."""
+    import jax
+    from scipy.stats import qmc
+
+    d = len(space.slots)
+    if problem.screen == 0 or d == 0:
+        return np.zeros((0, d))
+    U = qmc.Sobol(d, scramble=True, seed=problem.seed).random(problem.screen)
+    if problem.needs_pulse:  # the exact path: one solve per point, as the search itself
+        vals = np.array([ev.pulse_objective(u) for u in U])
+    else:
+        from .simulate import simulate_batch
+
+        X = jax.vmap(space.to_x)(U)
+        stacks, states = jax.vmap(space.dm)(X)
+        opts = {k: v for k, v in space.dm.built.simulate_options.items() if k in ("solver", "tolerances", "t_max")}
+        sol = simulate_batch(stacks, states, save_steps=False, max_steps=16_384, **opts)
+        ev.count += len(U)
+        speed = np.asarray(jax.vmap(space.dm.drop_speed)(X)) if not space.dm.chain else space.dm.drop_speed(None)
+        vals = np.where(sol.ok, -sol.launch_velocities[:, -1] / speed, np.inf)
+    if problem.total_mass is not None:
+        masses = np.array([float(ev._mass(u)[0]) for u in U]) if d else np.zeros(0)
+        vals = np.where(masses <= problem.total_mass, vals, np.inf)
+    order = np.argsort(vals)
+    return U[order][np.isfinite(vals[order])]
+
+
+@dataclasses.dataclass
+class _Run:
+    u: np.ndarray
+    value: float
+    iterations: int
+    message: str
+    success: bool
+    history: list
+
+
+def _local(space: _Space, ev: _Evaluator, problem: OptimizeSpec, u0: np.ndarray) -> _Run:
+    from scipy.optimize import Bounds, LinearConstraint, NonlinearConstraint, minimize
+
+    d = len(u0)
+    bounds = Bounds(np.zeros(d), np.ones(d))
+    history: list[float] = []
+    cons = []
+    if problem.total_mass is not None:
+        if problem.needs_pulse:
+            cons.append(NonlinearConstraint(lambda u: float(ev._mass(u)[0]), -np.inf, problem.total_mass))
+        else:
+            cons.append({"type": "ineq", "fun": lambda u: problem.total_mass - float(ev._mass(u)[0]),
+                         "jac": lambda u: -np.asarray(ev._mass(u)[1])})
+    if problem.needs_pulse:
+        if problem.max_peak_g is not None or problem.max_peak_force is not None:
+            cons.append(NonlinearConstraint(ev.pulse_constraints, 0.0, np.inf))
+        res = minimize(ev.pulse_objective, u0, method="COBYQA", bounds=bounds, constraints=cons,
+                       callback=lambda intermediate_result: history.append(float(intermediate_result.fun)),
+                       options={"maxiter": problem.max_iterations, "initial_tr_radius": 0.1,
+                                "final_tr_radius": 1e-8})
+    else:
+        def record(*args):  # the objective at each iterate (the last evaluation is the accepted point)
+            u = args[0].x if hasattr(args[0], "x") else args[0]
+            last = getattr(ev, "last", None)
+            history.append(last[1] if last is not None and np.array_equal(last[0], u) else ev.value_and_grad(u)[0])
+
+        if cons:
+            res = minimize(ev.value_and_grad, u0, jac=True, method="SLSQP", bounds=bounds, constraints=cons,
+                           callback=record, options={"maxiter": problem.max_iterations, "ftol": 1e-14})
+        else:
+            res = minimize(ev.value_and_grad, u0, jac=True, method="L-BFGS-B", bounds=bounds, callback=record,
+                           options={"maxiter": problem.max_iterations, "ftol": 1e-15, "gtol": 1e-10,
+                                    "maxls": 40})
+    return _Run(np.clip(res.x, 0, 1), float(res.fun), int(getattr(res, "nit", 0)), str(res.message),
+                bool(res.success), history)
+
+
+# ------------------------------------------------------------------------------------------ result
+@dataclasses.dataclass(frozen=True)
+class OptimizeResult:
+    """The outcome of `optimize` (SI units).
+
+    `status` (`OptimizeStatus`), `objective`, `objective_value` (the exact post-processor's at the best
+    point: the negative gain, or the squared relative misses of the pulse), `variables` (label -> value),
+    `report` (the `analysis.Report` of the best stack, simulated from `document()`), `start` and
+    `rigid_designs` (name -> Report, the paper's MVG and MET stacks with the same end masses and contacts),
+    `convergence` (per start: iterations, value, message, projected-gradient norm, active bounds;
+    `starts_agree`; `history` of the best start), `evaluations` and `seconds`.
+    """
+
+    status: OptimizeStatus
+    objective: str
+    objective_value: float
+    n: int
+    variables: dict
+    report: Any
+    start: Any
+    rigid_designs: dict
+    convergence: dict
+    evaluations: int
+    seconds: float
+    doc: dict = dataclasses.field(repr=False, default_factory=dict)
+    source: str | None = None
+
+    @property
+    def masses(self) -> np.ndarray:
+        return np.asarray(self.report.masses)
+
+    @property
+    def top_velocity_gain(self) -> float:
+        return float(self.report.top_velocity_gain)
+
+    def document(self) -> str:
+        """The optimum as a stack file (TOML, without `[optimize]`)."""
+        import tomli_w
+
+        head = (f"# Written by hertz-chain optimize{' from ' + self.source if self.source else ''}: objective "
+                f"{self.objective!r}, status {self.status.text}, top velocity gain {self.top_velocity_gain:.9g}.\n"
+                "# Plain numbers are SI units (kg, m, N/m^1.5 or N/m, m/s).\n")
+        return head + tomli_w.dumps(self.doc)
+
+    def to_dict(self) -> dict:
+        from .report import to_dict as report_dict
+
+        def brief(rep):
+            if rep is None:
+                return None
+            tp = rep.top_pulse
+            return {"status": rep.status.text, "top_velocity_gain": rep.top_velocity_gain,
+                    "masses": rep.masses.tolist(),
+                    "top_peak_g": None if tp is None else tp.peak / 9.80665,
+                    "top_equivalent_half_sine_duration": None if tp is None else tp.equivalent_half_sine_duration}
+
+        rep = report_dict(self.report)
+        return {
+            "status": self.status.text,
+            "objective": self.objective,
+            "objective_value": self.objective_value,
+            "top_velocity_gain": self.top_velocity_gain,
+            "n": self.n,
+            "masses": self.masses.tolist(),
+            "gaps": self._gaps(),
+            "variables": self.variables,
+            "top_pulse": rep.get("pulses", [None])[-1] if isinstance(rep.get("pulses"), list) else None,
+            "start": brief(self.start),
+            "rigid_designs": {k: brief(v) for k, v in self.rigid_designs.items()},
+            "convergence": self.convergence,
+            "evaluations": self.evaluations,
+            "seconds": self.seconds,
+        }
+
+    def _gaps(self) -> list:
+        """The gaps (m) of the best stack, from its stack file."""
+        gaps = self.doc.get("stack", {}).get("gaps", 0.0)
+        return gaps if isinstance(gaps, list) else [gaps] * (self.n - 1)
+
+
+def _set_interface(doc: dict, j: int, key: str, value: float) -> None:
+    contact = doc.setdefault("contact", {})
+    if j == 0:
+        contact.setdefault("ground", {})[key] = value
+        return
+    entries = contact.setdefault("interface", [])
+    for e in entries:
+        idx = e.get("index")
+        if idx == j:
+            e[key] = value
+            return
+        if isinstance(idx, list) and j in idx:
+            rest = [i for i in idx if i != j]
+            e["index"] = rest if len(rest) > 1 else rest[0]
+            entries.append({**e, "index": j, key: value})
+            return
+    entries.append({"index": j, key: value})
+
+
+def _document(space: _Space, x: np.ndarray) -> dict:
+    """The stack file of the design `x` (a copy of the file's document with the values written in)."""
+    import copy
+
+    doc = copy.deepcopy(space.doc)
+    f = {k: np.asarray(v) for k, v in space.dm.fields(x).items()}
+    stack = doc.setdefault("stack", {})
+    stack.pop("design", None)
+    stack["masses"] = [float(m) for m in f["stack.masses"]]
+    if any(s.key == "stack.gaps" for s in space.slots) or space.n != len(space.dm.base["stack.masses"]):
+        stack["gaps"] = [float(g) for g in f["stack.gaps"]]
+    for s, v in zip(space.slots, x):
+        if s.key in ("contact.stiffness", "contact.restitution"):
+            _set_interface(doc, s.index, s.key.split(".")[1], float(v))
+        elif s.key.startswith("drop."):
+            drop = doc.setdefault("drop", {})
+            drop.pop("height", None)
+            drop.pop("impact_velocity", None)
+            drop[s.key.split(".")[1]] = float(v)
+    return doc
+
+
+def _projected_gradient(ev: _Evaluator, u: np.ndarray) -> float:
+    if ev.problem.needs_pulse:
+        return math.nan
+    _, g = ev.value_and_grad(u)
+    return float(np.linalg.norm(u - np.clip(u - g, 0.0, 1.0), ord=np.inf))
+
+
+def _rigid_designs(space: _Space, best_masses: np.ndarray) -> dict:
+    """The paper's MVG (Eq 15) and MET (Eq 25) stacks with the optimum's end masses, simulated under the
+    same contacts (the file's, with the masses replaced)."""
+    from ._design import with_masses
+    from .rigid import met_design, mvg_masses
+    from .workflow import run_spec
+
+    e = space.spec.contact.default.restitution
+    m1, mn, n = float(best_masses[0]), float(best_masses[-1]), len(best_masses)
+    out = {}
+    if n < 2 or not mn < m1 or space.dm.chain:
+        return out
+    designs = {"mvg": mvg_masses(mn / m1, n, m1)}
+    if e is not None and e < 1:
+        try:
+            designs["met"] = np.asarray(met_design(mn / m1, e, m1=m1).masses)
+        except Exception:
+            pass
+    for name, masses in designs.items():
+        try:
+            out[name] = run_spec(with_masses(space.spec, masses))
+        except Exception:
+            out[name] = None
+    return out
+
+
+def optimize(path: str | Path, *, progress: bool = False) -> OptimizeResult:
+    """Optimise the stack of the stack file `path` as its `[optimize]` section asks (module docstring).
+
+    **Returns** an `OptimizeResult`. **Raises** `StackFileError` for a bad file or `[optimize]` section
+    (one line), before any simulation.
+    """
+    from ._design import with_masses  # noqa: F401
+    from .workflow import run_spec
+
+    t0 = time.perf_counter()
+    spec, problem, doc = read_optimize_file(path)
+    from .build import design_masses
+
+    ns = problem.n or (len(design_masses(spec)),)
+    spaces = [_space(spec, doc, problem, n) for n in ns]  # every check before any solve
+    best = None
+    evaluations = 0
+    for space in spaces:
+        ev = _Evaluator(space, problem)
+        u_file = space.to_u(space.dm.values())
+        screened = _screen(space, ev, problem)
+        starts = [u_file] + list(screened[: max(problem.starts - 1, 0)])
+        runs = [_local(space, ev, problem, u) for u in starts]
+        evaluations += ev.count
+        runs.sort(key=lambda r: r.value)
+        top = runs[0]
+        if best is None or top.value < best[1][0].value:
+            best = (space, runs, ev)
+    space, runs, ev = best
+    top = runs[0]
+    x = np.asarray(space.to_x(top.u))
+    doc_best = _document(space, x)
+    spec_best = parse_stack(doc_best, source=str(path))
+    report = run_spec(spec_best)
+    start = run_spec(spec)
+    rigid = _rigid_designs(space, np.asarray(report.masses))
+    pg = _projected_gradient(ev, top.u)
+    scale = max(abs(top.value), 1e-12)
+    agree = sum(abs(r.value - top.value) <= 1e-6 * scale for r in runs)
+    active = [s.label + (" (lower)" if ui <= 1e-9 else " (upper)") for s, ui in zip(space.slots, top.u)
+              if ui <= 1e-9 or ui >= 1 - 1e-9]
+    if problem.objective == "gain":
+        value = -report.top_velocity_gain
+    else:
+        mt = ev.metrics(top.u)
+        value = (mt["peak_g"] / problem.target_peak_g - 1) ** 2 + (mt["duration"] / problem.target_duration - 1) ** 2 \
+            if mt["ok"] else math.inf
+    status = OptimizeStatus.CONVERGED if top.success else OptimizeStatus.NOT_CONVERGED
+    if not report.status.ok or not math.isfinite(value):
+        status = OptimizeStatus.FAILED
+    convergence = {
+        "method": ("COBYQA" if problem.needs_pulse else ("SLSQP" if problem.total_mass else "L-BFGS-B")),
+        "starts": [{"value": r.value, "iterations": r.iterations, "message": r.message, "success": r.success}
+                   for r in runs],
+        "starts_agree": f"{agree} of {len(runs)} within 1e-6 of the best",
+        "iterations": top.iterations,
+        "projected_gradient_norm": pg,
+        "active_bounds": active,
+        "history": top.history,
+        "n_tried": list(ns),
+    }
+    return OptimizeResult(
+        status=status, objective=problem.objective, objective_value=float(value), n=space.n,
+        variables={s.label: float(v) for s, v in zip(space.slots, x)}, report=report, start=start,
+        rigid_designs=rigid, convergence=convergence, evaluations=evaluations + ev.count,
+        seconds=time.perf_counter() - t0, doc=doc_best, source=str(path),
+    )
