@@ -5,6 +5,8 @@ Commands:
 - `hertz-chain design --ratio R --restitution e` — the paper's optimal MVG and MET designs.
 - `hertz-chain simulate STACK.toml [--json] [--plot F.png] [--output F.nc|F.csv]` — simulate a stack
   file and compare with the rigid model.
+- `hertz-chain optimize STACK.toml [--json] [--write OUT.toml] [--plot F.png]` — the best stack under
+  compliant contacts (`hertz_chain.optimize`; exit 0 converged, 3 not converged, 5 failed).
 - `hertz-chain demo` — the paper's optimal six-mass MVG stack, gapped and touching.
 
 Every user error (bad file, bad parameter, bad path, unknown command or flag, missing argument) prints
@@ -187,6 +189,54 @@ def simulate(
         typer.echo(f"hertz-chain: {status.text}: {_one_line(hint)}" if hint else f"hertz-chain: {status.text}",
                    err=True)
         raise typer.Exit(code=status.exit_code)
+
+
+@app.command()
+def optimize(
+    stack_file: Path = typer.Argument(..., help="Stack file with an [optimize] section (docs/optimize.md)."),
+    as_json: bool = typer.Option(False, "--json", help="Print the result as JSON."),
+    write: Optional[Path] = typer.Option(None, "--write", "-w", help="Write the optimum as a stack file (.toml)."),
+    plot: Optional[Path] = typer.Option(None, "--plot", help="Write the convergence and the pulses (PNG)."),
+    force: bool = typer.Option(False, "--force", help="Overwrite existing output files."),
+) -> None:
+    """Find the stack that maximises the launch gain, or that gives a target pulse, under compliant contacts."""
+    from . import _paths
+    from .optimize import read_optimize_file
+
+    try:
+        if write is not None and plot is not None and os.path.abspath(write) == os.path.abspath(plot):
+            _fail(f"--plot {plot}: the same file as --write")
+        if write is not None:
+            _paths.check_output_path(write, "--write", (".toml",), force)
+            if os.path.exists(stack_file) and os.path.abspath(write) == os.path.abspath(stack_file):
+                _fail(f"--write {write}: the input stack file itself; write the optimum to another file")
+        if plot is not None:
+            _paths.check_output_path(plot, "--plot", PLOT_SUFFIXES, force)
+        read_optimize_file(stack_file)  # the file and its [optimize] section, before JAX is imported
+    except HertzChainError as exc:
+        _fail(str(exc))
+    from . import report
+    from .optimize import optimize as run_optimize
+
+    try:
+        result = run_optimize(stack_file)
+    except HertzChainError as exc:
+        _fail(str(exc))
+    typer.echo(report.to_json(result.to_dict()) if as_json else report.optimize_table(result))
+    try:
+        if write is not None:
+            _paths.write_atomically(write, lambda tmp: Path(tmp).write_text(result.document(), encoding="utf-8"),
+                                    force, "--write")
+        if plot is not None:
+            from . import plot as plotting
+
+            _paths.write_atomically(plot, lambda tmp: plotting.plot_optimize(result, tmp), force, "--plot")
+    except HertzChainError as exc:
+        _fail(str(exc))
+    if not result.status.ok:
+        typer.echo(f"hertz-chain: optimize {result.status.text}: the best point found is reported "
+                   f"({_one_line(result.convergence['starts'][0]['message'])})", err=True)
+        raise typer.Exit(code=result.status.exit_code)
 
 
 @app.command()

@@ -9,7 +9,7 @@ import numpy as np
 from .analysis import Report
 from .pulse import G0
 
-__all__ = ["report_figure", "plot_report"]
+__all__ = ["report_figure", "plot_report", "plot_optimize"]
 
 
 def report_figure(report: Report):
@@ -73,4 +73,31 @@ def plot_report(report: Report, path: str | Path) -> None:
 
     fig = report_figure(report)
     fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_optimize(result, path: str | Path) -> None:
+    """The convergence of the best start (objective per iteration) and the top pulse of the optimum
+    against the starting stack's and the MVG design's, as a PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(12, 4.5), constrained_layout=True)
+    hist = result.convergence.get("history") or []
+    if hist:
+        best = min(hist)
+        ax0.semilogy(range(1, len(hist) + 1), np.maximum(np.asarray(hist) - best, 1e-16), marker="o")
+    ax0.set(xlabel="iteration", ylabel="objective - best", title=f"Convergence ({result.convergence['method']})")
+    for label, rep in (("optimum", result.report), ("start", result.start),
+                       ("MVG", result.rigid_designs.get("mvg"))):
+        if rep is None or rep.solution is None or rep.solution.steps is None:
+            continue
+        st = rep.solution.steps
+        g = float(rep.solution.stack.gravity)
+        ax1.plot(st.t * 1e3, (st.accelerations[:, -1] + g) / G0, label=label)
+    ax1.set(xlabel="time (ms)", ylabel="top mass acceleration (g)", title="Top pulse")
+    ax1.legend()
+    fig.savefig(path, dpi=120, format="png")
     plt.close(fig)

@@ -21,7 +21,8 @@ from .constants import G0
 if TYPE_CHECKING:
     from .analysis import Report
 
-__all__ = ["to_dict", "to_json", "summary_table", "write_output", "to_dataset", "design_dict", "design_table"]
+__all__ = ["to_dict", "to_json", "summary_table", "write_output", "to_dataset", "design_dict", "design_table",
+           "optimize_table"]
 
 
 # ------------------------------------------------------------------------------------------ JSON
@@ -299,4 +300,31 @@ def design_table(cmp) -> str:
              "  MET: " + ", ".join(f"{m:.5g}" for m in met.masses),
              "",
              "MVG/MET ratios are the quantities of the paper's Figs 13 (G), 14 (K) and 15/18 (M)."]
+    return "\n".join(lines)
+
+
+def optimize_table(result) -> str:
+    """An `optimize.OptimizeResult` as text: the best stack against the start and the paper's designs,
+    the varied values and the convergence."""
+    def row(name, rep):
+        if rep is None:
+            return f"  {name:<22} (could not be simulated)"
+        tp = rep.top_pulse
+        pulse = "" if tp is None else f"   peak {tp.peak / G0:9.4g} g, half-sine {tp.equivalent_half_sine_duration * 1e3:.4g} ms"
+        return f"  {name:<22} gain {rep.top_velocity_gain:.6f}{pulse}"
+
+    c = result.convergence
+    lines = [f"Optimised stack ({result.objective}, n = {result.n}): {result.status.text}; "
+             f"objective {result.objective_value:.9g}", "",
+             "masses [kg], bottom first: " + ", ".join(f"{m:.6g}" for m in result.masses), "",
+             "varied:"]
+    lines += [f"  {k} = {v:.9g}" for k, v in result.variables.items()]
+    lines += ["", "compared under the same contacts:", row("optimum", result.report), row("start (the file)", result.start)]
+    lines += [row(f"{k.upper()} (n = {len(v.masses)})" if v is not None else k.upper(), v)
+              for k, v in result.rigid_designs.items()]
+    pg = c.get("projected_gradient_norm")
+    lines += ["", f"convergence: {c['method']}, {c['iterations']} iterations, starts: {c['starts_agree']}, "
+              f"{result.evaluations} evaluations, {result.seconds:.1f} s",
+              f"  projected-gradient norm {pg:.3g}" if pg is not None and pg == pg else "  (derivative-free)",
+              "  active bounds: " + (", ".join(c["active_bounds"]) or "none")]
     return "\n".join(lines)

@@ -1,0 +1,233 @@
+"""Design by the compliant model (`hertz_chain.optimize`, `hertz_chain._design`, `hertz_chain.keys`).
+
+References: the paper's MVG masses (Eq 15) and gain (Eq 20), written out here; an independent optimum
+computed with scipy alone (its own ODE integration of the touching stack and a bounded 1-D search);
+`build` itself for the design map (the map must reproduce the file it came from); central differences
+for the gradients; the half-sine target of MIL-STD-883 Method 2002 condition B (1500 g, 0.5 ms).
+"""
+
+import json
+import math
+import types
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+import tomli_w
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq, minimize_scalar
+
+import hertz_chain as hc
+from hertz_chain._design import DesignMap
+from hertz_chain.build import build
+from hertz_chain.cli import main
+from hertz_chain.errors import StackFileError
+from hertz_chain.keys import resolve
+from hertz_chain.optimize import _document, optimize, prepare
+from hertz_chain.registry import LAWS
+from hertz_chain.stackfile import parse_stack
+
+G0 = 9.80665
+
+
+def _write(tmp_path, doc, name="stack.toml"):
+    path = tmp_path / name
+    path.write_text(tomli_w.dumps(doc), encoding="utf-8")
+    return path
+
+
+def _cli(argv, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    out = capsys.readouterr()
+    return exc.value.code, out.out, out.err
+
+
+def _stack_doc(law="tsuji", gravity=None, gaps="1 mm", masses=(1.0, 0.3, 0.1), **contact):
+    k = "5e7 N/m" if LAWS[law].stiffness == "linear_stiffness" else "1e9 N/m^1.5"
+    c = {"law": law, "stiffness": k} | ({} if LAWS[law].elastic else {"restitution": 0.8}) | contact
+    drop = {"impact_velocity": "1 m/s"} | ({} if gravity is None else {"gravity": gravity})
+    return {"drop": drop, "stack": {"masses": list(masses), "gaps": gaps}, "contact": c}
+
+
+# ------------------------------------------------------------------------------------ the design map
+@pytest.mark.parametrize("law", list(LAWS))
+def test_design_map_reproduces_build_of_the_written_file(law):
+    """At the file's values the map is `build(spec)`; at other values it is `build` of the stack file
+    written with those values (`--write`), under gravity with gaps, for every law of the registry."""
+    doc = _stack_doc(law)
+    doc["contact"]["ground"] = {"stiffness": "3e9 N/m^1.5" if LAWS[law].hertzian else "2e8 N/m"}
+    spec = parse_stack(doc)
+    slots = (resolve("stack.masses", [2], n=3, ground=True) + resolve("stack.gaps", [1], n=3, ground=True)
+             + resolve("contact.stiffness", [0, 2], n=3, ground=True)
+             + resolve("drop.impact_velocity", None, n=3, ground=True))
+    if not LAWS[law].elastic:
+        slots += resolve("contact.restitution", [1], n=3, ground=True)
+    dm = DesignMap(spec, slots)
+    leaves = lambda tree: [np.asarray(a) for a in jax.tree.leaves(tree)]  # noqa: E731
+    for got, want in zip(leaves(dm(dm.values())), leaves((build(spec).stack, build(spec).state))):
+        np.testing.assert_allclose(got, want, rtol=1e-13, atol=0)
+    x = dm.values() * np.array([0.7, 2.0, 1.5, 0.5, 1.3] + ([0.9] if not LAWS[law].elastic else []))
+    space = types.SimpleNamespace(doc=doc, slots=dm.slots, n=3, dm=dm)  # what `_document` reads
+    written = parse_stack(tomli_w.dumps(_document(space, x)))
+    ref = build(written)
+    for got, want in zip(leaves(dm(x)), leaves((ref.stack, ref.state))):
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-15)
+
+
+@pytest.mark.parametrize("law", ["hertz", "hunt-crossley"])
+def test_design_gradient_matches_central_differences(law):
+    """d(top launch velocity)/d(middle mass, top stiffness, restitution) under gravity with gaps,
+    reverse mode through the design map, against central differences (step 1e-5 relative), to the
+    issue's 1e-5."""
+    spec = parse_stack(_stack_doc(law))
+    slots = resolve("stack.masses", [2], n=3, ground=True) + resolve("contact.stiffness", [2], n=3, ground=True)
+    if law == "hunt-crossley":
+        slots += resolve("contact.restitution", [1], n=3, ground=True)
+    dm = DesignMap(spec, slots)
+    f = jax.jit(lambda x: hc.launch_velocity(*dm(x))[-1])
+    x0 = dm.values()
+    grad = np.asarray(jax.grad(f)(jnp.asarray(x0)))
+    for i in range(len(x0)):
+        h = 1e-5 * x0[i]
+        up, down = x0.copy(), x0.copy()
+        up[i] += h
+        down[i] -= h
+        fd = (float(f(up)) - float(f(down))) / (2 * h)
+        assert grad[i] == pytest.approx(fd, rel=1e-5), (slots[i].label, grad[i], fd)
+
+
+# ------------------------------------------------------------------------------------ independent optima
+def _tsuji_eta_reference(e):
+    """eta of the clamped Tsuji law for restitution e: nondimensional impact (m* = k = v = 1) integrated
+    here, the contact ending where the force returns to zero."""
+    def restitution(eta):
+        def rhs(t, y):
+            d, v = y
+            f = max(d, 0.0) ** 1.5 + eta * max(d, 0.0) ** 0.25 * v if d > 0 else 0.0
+            return [v, -max(f, 0.0)]
+        end = lambda t, y: (y[0] ** 1.5 + eta * y[0] ** 0.25 * y[1]) if y[0] > 0 else y[1]  # noqa: E731
+        end.terminal, end.direction = True, -1
+        sol = solve_ivp(rhs, (0, 50), [0.0, 1.0], events=end, rtol=1e-12, atol=1e-14, method="DOP853",
+                        first_step=1e-6)
+        return -sol.y_events[0][0][1]
+    return brentq(lambda eta: restitution(eta) - e, 1e-3, 3.0, xtol=1e-14)
+
+
+def _touching_gain_reference(m, k, eta, v=1.0, t_end=0.01):
+    """Top launch gain of a touching stack (g = 0) on a rigid ground, Tsuji contacts (clamped), integrated
+    here with DOP853 until every contact has long opened."""
+    m = np.asarray(m, dtype=float)
+    n = m.size
+    meff = np.concatenate([m[:1], m[:-1] * m[1:] / (m[:-1] + m[1:])])
+    c = eta * np.sqrt(meff * k)
+
+    def rhs(t, y):
+        x, u = y[:n], y[n:]
+        d = np.concatenate([[-x[0]], x[:-1] - x[1:]])
+        dd = np.concatenate([[-u[0]], u[:-1] - u[1:]])
+        dp = np.maximum(d, 0.0)
+        f = np.where(d > 0, np.maximum(k * dp**1.5 + c * dp**0.25 * dd, 0.0), 0.0)
+        a = (f - np.append(f[1:], 0.0)) / m
+        return np.concatenate([u, a])
+
+    sol = solve_ivp(rhs, (0, t_end), np.concatenate([np.zeros(n), -v * np.ones(n)]), method="DOP853",
+                    rtol=1e-12, atol=1e-15, first_step=1e-9)
+    u = sol.y[n:, -1]
+    assert u[-1] == max(u)  # the top flies away fastest: its launch is its final velocity
+    return u[-1] / v
+
+
+def test_touching_three_mass_optimum_matches_independent_scipy_optimum(tmp_path):
+    """A touching 3-mass Tsuji stack (e = 0.8, g = 0), end masses fixed: the optimiser's gain equals the
+    optimum of a bounded 1-D search on this file's own scipy integration, to 1e-5 in gain."""
+    doc = _stack_doc("tsuji", gravity=0, gaps=0)
+    doc["optimize"] = {"objective": "gain", "starts": 2, "screen": 8,
+                       "vary": [{"key": "stack.masses", "index": [2], "bounds": ["10 g", "1 kg"]}]}
+    result = optimize(_write(tmp_path, doc))
+    eta = _tsuji_eta_reference(0.8)
+    gain = lambda lm2: -_touching_gain_reference([1.0, math.exp(lm2), 0.1], 1e9, eta)  # noqa: E731
+    grid = np.linspace(math.log(0.01), math.log(1.0), 13)
+    i = int(np.argmin([gain(v) for v in grid]))
+    ref = minimize_scalar(gain, bounds=(grid[max(i - 1, 0)], grid[min(i + 1, 12)]), method="bounded",
+                          options={"xatol": 1e-6})
+    assert result.status.ok
+    assert result.top_velocity_gain == pytest.approx(-ref.fun, rel=1e-5)
+    assert result.masses[1] == pytest.approx(math.exp(ref.x), rel=2e-3)
+    # and it beats the MVG masses under the same contacts (the issue's "touching stacks" check)
+    assert result.top_velocity_gain > result.rigid_designs["mvg"].top_velocity_gain
+
+
+def test_condition_b_inverse_design_and_the_written_file(tmp_path, capsys):
+    """MIL-STD-883 Method 2002 condition B (1500 g, 0.5 ms half-sine) on a 100 g top mass, under gravity:
+    the written stack file, re-simulated by `hertz-chain simulate`, meets it within 2 % in peak and in
+    the equivalent half-sine duration."""
+    doc = {"drop": {"impact_velocity": "2 m/s"}, "stack": {"masses": ["1 kg", "100 g"], "gaps": 0},
+           "contact": {"law": "tsuji", "stiffness": "1e8 N/m^1.5", "restitution": 0.8,
+                       "ground": {"stiffness": "1e10 N/m^1.5"}},
+           "optimize": {"objective": "pulse", "target_peak_g": 1500, "target_duration": "0.5 ms", "starts": 1,
+                        "screen": 8,
+                        "vary": [{"key": "drop.impact_velocity", "bounds": ["0.5 m/s", "5 m/s"]},
+                                 {"key": "contact.stiffness", "index": [1], "bounds": ["1e6 N/m^1.5", "1e10 N/m^1.5"]}]}}
+    path = _write(tmp_path, doc)
+    out = tmp_path / "best.toml"
+    code, text, err = _cli(["optimize", str(path), "--json", "--write", str(out)], capsys)
+    assert code == 0, err
+    res = json.loads(text)
+    for key in ("status", "objective_value", "top_velocity_gain", "masses", "gaps", "start", "rigid_designs",
+                "evaluations", "convergence"):
+        assert key in res
+    assert "[optimize" not in out.read_text()
+    code, text, err = _cli(["simulate", str(out), "--json"], capsys)
+    assert code == 0, err
+    top = json.loads(text)["pulses"][-1]
+    assert top["peak_g"] == pytest.approx(1500, rel=0.02)
+    assert top["equivalent_half_sine_ms"] == pytest.approx(0.5, rel=0.02)
+    assert json.loads(text)["top_velocity_gain"] == pytest.approx(res["top_velocity_gain"], rel=1e-12)
+
+
+# ------------------------------------------------------------------------------------ bad input
+BASE = {"drop": {"impact_velocity": "1 m/s"}, "stack": {"masses": [1.0, 0.3, 0.1], "gaps": 0},
+        "contact": {"law": "tsuji", "stiffness": "1e9 N/m^1.5", "restitution": 0.8}}
+
+
+@pytest.mark.parametrize("optimize_section, words", [
+    ({"vary": [{"key": "stack.mass", "bounds": ["1 g", "1 kg"]}]}, ["stack.mass", "did you mean 'stack.masses'"]),
+    ({"vary": [{"key": "stack.masses", "index": [7], "bounds": ["1 g", "1 kg"]}]}, ["index", "7", "out of range"]),
+    ({"vary": [{"key": "stack.masses", "index": [3], "bounds": ["1 g", "1 kg"]}]}, ["end mass", "fix_ends"]),
+    ({"vary": [{"key": "stack.masses", "bounds": ["1 kg", "1 g"]}]}, ["bounds", "lower bound must be below"]),
+    ({"vary": [{"key": "stack.masses", "bounds": ["1 m", "2 m"]}]}, ["bounds", "mass"]),
+    ({"vary": [{"key": "contact.restitution", "index": [1], "bounds": [0.5, 1.5]}]}, ["at most 1"]),
+    ({"total_mass": "1 kg", "vary": [{"key": "stack.masses", "bounds": ["1 g", "1 kg"]}]},
+     ["total_mass", "infeasible", "1.1"]),
+    ({"objective": "pulse", "vary": [{"key": "drop.impact_velocity", "bounds": ["1 m/s", "2 m/s"]}]},
+     ["target_peak_g", "missing"]),
+    ({"objective": "speed", "vary": [{"key": "drop.impact_velocity", "bounds": ["1 m/s", "2 m/s"]}]},
+     ["objective", "'speed'", "gain, pulse"]),
+    ({}, ["optimize.vary", "missing"]),
+    ({"starts": 0, "vary": [{"key": "drop.impact_velocity", "bounds": ["1 m/s", "2 m/s"]}]}, ["starts", "1 to 64"]),
+    ({"vary": [{"key": "drop.impact_velocity", "index": 1, "bounds": ["1 m/s", "2 m/s"]}]}, ["single number"]),
+])
+def test_bad_optimize_sections_give_one_line_and_exit_2(tmp_path, capsys, optimize_section, words):
+    path = _write(tmp_path, BASE | {"optimize": optimize_section})
+    with pytest.raises(StackFileError):
+        prepare(path)  # the library: every check before any solve
+    code, out, err = _cli(["optimize", str(path)], capsys)
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and err.startswith("hertz-chain: error: ")
+    for w in words:
+        assert w in err, (w, err)
+
+
+def test_write_never_replaces_the_input_or_an_existing_file(tmp_path, capsys):
+    path = _write(tmp_path, BASE | {"optimize": {"vary": [{"key": "drop.impact_velocity",
+                                                            "bounds": ["1 m/s", "2 m/s"]}]}})
+    before = path.read_text()
+    code, _, err = _cli(["optimize", str(path), "--write", str(path), "--force"], capsys)
+    assert code == 2 and "input stack file" in err
+    existing = tmp_path / "taken.toml"
+    existing.write_text("mine")
+    code, _, err = _cli(["optimize", str(path), "--write", str(existing)], capsys)
+    assert code == 2 and "--force" in err
+    assert path.read_text() == before and existing.read_text() == "mine"
