@@ -49,6 +49,8 @@ _EXPORTS = {
     "material": "materials",
     "material_names": "materials",
     "G0": "constants",
+    "OptimizeResult": "optimize",
+    "optimize": "optimize",
     "PulseMetrics": "pulse",
     "pulse_metrics": "pulse",
     "DesignComparison": "rigid",
@@ -115,7 +117,7 @@ def __dir__():
 
 
 class _Package(types.ModuleType):
-    """Keeps the functions `simulate`, `srs` and `build` from being shadowed by their submodules of
+    """Keeps the functions `simulate`, `srs`, `build` and `optimize` from being shadowed by their submodules of
     the same name when the import system binds a loaded submodule onto the package (as the eager
     `from .simulate import simulate` of a classic `__init__` would)."""
 
@@ -155,6 +157,7 @@ if TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
     from .errors import HertzChainError, ParameterError, SolverError, StackFileError
     from .materials import Material, contact_stiffness, effective_mass, material, material_names
     from .constants import G0, STANDARD_GRAVITY
+    from .optimize import OptimizeResult, optimize
     from .pulse import PulseMetrics, pulse_metrics
     from .rigid import (
         DesignComparison,

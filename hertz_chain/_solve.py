@@ -77,7 +77,7 @@ def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _Config, history: 
     subs.append(dfx.SubSaveAt(t1=True))
     return dfx.diffeqsolve(
         dfx.ODETerm(_scaled_field),
-        _Tracked.around(cfg.solver, cfg.adjoint, audit=audit),
+        _Tracked.around(cfg.solver, cfg.adjoint, audit=audit, launch=cfg.until == "launch"),
         t0=0.0,
         t1=t1s,
         dt0=cfg.tolerances.first_step,
@@ -85,7 +85,7 @@ def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _Config, history: 
         args=(stack, scale, T, y0s[stack.n : 2 * stack.n]),
         saveat=dfx.SaveAt(subs=subs, solver_state=True),
         stepsize_controller=cfg.tolerances.controller(),
-        event=dfx.Event(_cascade_complete) if cfg.until == "cascade" else None,
+        event=dfx.Event(_cascade_complete) if cfg.until != "t_max" else None,
         max_steps=cfg.max_steps,
         adjoint=cfg.adjoint,
         throw=False,
@@ -128,7 +128,7 @@ def _outputs(stack: Stack, sc: Scales, scale, core: dict, until: str = "cascade"
     c = core["contacts"]
     over = c.cascade[0] > 0
     t_c, v_c = t_fin, v_fin
-    if until != "cascade":
+    if until == "t_max":
         t_c = jnp.where(over, c.cascade[2] * sc.time, t_fin)
         v_c = jnp.where(over, c.cascade[5:] * scale[n : 2 * n], v_fin)
     t_end_if = _end_of_contacts(stack, c, sc.time, t_c)

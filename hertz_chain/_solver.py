@@ -15,8 +15,9 @@ from . import _config  # noqa: F401  (float64)
 from . import registry as _registry
 from .errors import ParameterError
 
-#: What `simulate(..., until=...)` accepts: stop at the end of the first cascade, or go on to `t_max`.
-UNTIL = ("cascade", "t_max")
+#: What `simulate(..., until=...)` accepts: stop at the end of the first cascade, go on to `t_max`, or
+#: stop as soon as the top mass's launch is final (`_tracking._top_final`).
+UNTIL = ("cascade", "t_max", "launch")
 
 
 # ==================================================================== options

@@ -93,6 +93,28 @@ def _cascade_over(t, ys, args, x, v, d, dd, closed):
     return touched & ((apart[0] & free) | bound)
 
 
+def _top_final(v, d, closed, stack, touched_top):
+    """Without gravity, the top mass's launch is final (`until="launch"`): it has been pushed, its
+    contact is open and not closing, and no motion of the masses below can ever catch it. With the ground
+    their mechanical energy `E` (kinetic plus their contacts' elastic energy; the ground does no work,
+    the contacts dissipate) caps mass n-1's speed at `sqrt(2 E / m_{n-1})`; without it, their centre of
+    mass moves uniformly and mass n-1 can move away from it at most `sqrt(2 E_int (M - m)/(M m))`
+    (as in `_cascade_over`). Mass n moving faster than that cap is never pushed again, whatever happens
+    below (the lower masses may go on colliding, as a gapped stack without gravity does for seconds)."""
+    n, m = stack.n, stack.masses
+    pot = stack.potentials(d)
+    below = jnp.arange(n) < n - 1
+    if stack.ground:
+        energy = jnp.sum(jnp.where(below, 0.5 * m * v**2 + pot, 0.0))
+        cap = jnp.sqrt(2.0 * energy / m[n - 2])
+    else:
+        M, P = jnp.sum(jnp.where(below, m, 0.0)), jnp.sum(jnp.where(below, m * v, 0.0))
+        inner = jnp.sum(jnp.where(below & (jnp.arange(n) >= 1), pot, 0.0))
+        e_int = jnp.maximum(jnp.sum(jnp.where(below, 0.5 * m * v**2, 0.0)) - 0.5 * P**2 / M + inner, 0.0)
+        cap = P / M + jnp.sqrt(2.0 * e_int * (M - m[n - 2]) / (M * m[n - 2]))
+    return touched_top & ~closed[n - 1] & (stack.gravity <= 0) & (v[n - 1] >= cap)
+
+
 def _cascade_complete(t, ys, args, **kwargs):
     """diffrax event: the cascade-over flag that `_Tracked` wrote into the state's last entry (ends the
     solve at the first accepted step where `_cascade_over` holds)."""
@@ -122,7 +144,7 @@ class _Contacts(eqx.Module):
     energy: tuple[Array, Array] | None
 
     @staticmethod
-    def update(c: _Contacts | None, t, ys, args, audit: bool) -> _Contacts:
+    def update(c: _Contacts | None, t, ys, args, audit: bool, launch: bool = False) -> _Contacts:
         stack, scale = args[:2]
         n = stack.n
         y = ys[: scale.shape[0]] * scale
@@ -143,7 +165,10 @@ class _Contacts(eqx.Module):
         rows = jnp.where(jnp.stack([active] + [left] * 5, axis=-1) & ~frozen[:, None],
                          jnp.stack([t, t, d, dd, v_lo, v], axis=-1), c.rows)
         now = jnp.where(frozen, c.now, active)
-        over = _cascade_over(t[0], ys, args, x, v, d, dd, active) & ~was_over
+        over = _cascade_over(t[0], ys, args, x, v, d, dd, active)
+        if launch and n >= 2:  # `until="launch"`: or as soon as the top mass's launch is final
+            over = over | _top_final(v, d, active, stack, rows[n - 1, 0] >= 0)
+        over = over & ~was_over
         # the top mass's apex: free, pushed before, its velocity turned from up to down
         apex = ~active[n - 1] & (rows[n - 1, 0] >= 0) & (c.cascade[4] > 0) & (v_top <= 0)
         rebound = (c.cascade[1] > 0) | jnp.any(frozen & active & ~c.now)  # closes after it was open
@@ -162,9 +187,11 @@ class _Tracked(dfx.AbstractWrappedSolver):
 
     solver: dfx.AbstractSolver
     audit: bool = eqx.field(static=True)
+    launch: bool = eqx.field(static=True, default=False)
 
     @classmethod
-    def around(cls, solver: dfx.AbstractSolver, adjoint: dfx.AbstractAdjoint, audit: bool) -> _Tracked:
+    def around(cls, solver: dfx.AbstractSolver, adjoint: dfx.AbstractAdjoint, audit: bool,
+               launch: bool = False) -> _Tracked:
         # diffrax's ForwardMode and DirectAdjoint set `scan_kind` of a Runge–Kutta solver left at None
         # ("lax", "bounded") by `eqx.tree_at`, which cannot reach through the wrapper: do it here.
         # (RecursiveCheckpointAdjoint leaves it None: the stages' loop is then "checkpointed", faster.)
@@ -172,7 +199,7 @@ class _Tracked(dfx.AbstractWrappedSolver):
         kind = next((k for cls_, k in kinds.items() if isinstance(adjoint, cls_)), None)
         if kind is not None and getattr(solver, "scan_kind", "") is None:
             solver = eqx.tree_at(lambda s: s.scan_kind, solver, kind, is_leaf=lambda x: x is None)
-        return cls(solver, audit)
+        return cls(solver, audit, launch)
 
     @property
     def scan_kind(self):
@@ -204,12 +231,12 @@ class _Tracked(dfx.AbstractWrappedSolver):
         return self.solver.error_order(terms)
 
     def init(self, terms, t0, t1, y0, args):
-        return self.solver.init(terms, t0, t1, y0, args), _Contacts.update(None, t0, y0, args, self.audit)
+        return self.solver.init(terms, t0, t1, y0, args), _Contacts.update(None, t0, y0, args, self.audit, self.launch)
 
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
         inner, contacts = solver_state
         y1, y_error, dense_info, inner, result = self.solver.step(terms, t0, t1, y0, args, inner, made_jump)
-        contacts = _Contacts.update(contacts, t1, y1, args, self.audit)
+        contacts = _Contacts.update(contacts, t1, y1, args, self.audit, self.launch)
         # the cascade-over flag, read by the stopping event (`_scaled_field`); its derivative is zero, so
         # its error estimate is zero already
         y1 = y1.at[-1].set(contacts.cascade[0])

@@ -122,7 +122,8 @@ __all__ = [
 # ==================================================================== entry points
 def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, save_steps=True, until="cascade"):
     if until not in UNTIL:
-        raise ParameterError("until", until, "'cascade' (stop when the first cascade ends) or 't_max' (go on "
+        raise ParameterError("until", until, "'cascade' (stop when the first cascade ends), 'launch' (stop when "
+                             "the top mass's launch is final) or 't_max' (go on "
                              "to t_max and report later impacts as rebounds)")
     if until == "t_max" and t_max is None:
         raise ParameterError("t_max", None, "a time > 0 (s) with until='t_max'")
@@ -189,6 +190,10 @@ def simulate(
     - `until`: `"cascade"` (default) stops when the first cascade is over (`Solution.cascade_end_time`);
       `"t_max"` goes on to `t_max` (required then): later impacts (mass 1 falling back, masses landing
       again) are rebounds, `status` says so, and the launch velocities stay those of the first cascade.
+      `"launch"` stops as soon as the top mass's launch is final: as `"cascade"`, or earlier without
+      gravity once no motion of the masses below can reach the top mass (`_tracking._top_final`; a
+      gapped stack without gravity can go on colliding below for seconds). The top's launch velocity is
+      then exact and `complete` refers to it; the lower masses' velocities are those at the stop.
     - `ts`: optional times (s) at which to also report the state (dense output).
     - `max_steps`: step budget (default 65,536: the paper's ten-mass MET stack dropped under gravity,
       whose lower masses settle on the ground after the cascade, takes about 22,000 steps to the default
@@ -303,6 +308,7 @@ def launch_velocity(
     t_max: float | None = None,
     max_steps: int = 16_384,
     adjoint: str | dfx.AbstractAdjoint = "reverse",
+    until: str = "cascade",
 ) -> Array:
     """`(n,)` launch velocities (m/s) as a differentiable JAX function of the design.
 
@@ -319,10 +325,16 @@ def launch_velocity(
     Cost: reverse mode costs a few solves whatever the number of parameters; forward mode grows with
     it (prefer it for two or three). Reverse mode keeps the accepted states, `32 n` bytes per step of
     `max_steps`. Measured ratios: `benchmarks/results.md`.
+
+    `until`: `"cascade"` (default) or `"launch"` (stop as soon as the top mass's launch is final, as for
+    `simulate`: the top's entry is exact, the others are the velocities at that time).
     """
     tolerances = tolerances or Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True)
     replay = isinstance(adjoint, str) and adjoint == "reverse"
-    _, t_max, cfg = _prepare(stack, state, None, t_max, solver, tolerances, max_steps, adjoint, save_steps=False)
+    if until not in ("cascade", "launch"):
+        raise ParameterError("until", until, "'cascade' or 'launch' (launch_velocity stops at the cascade's end)")
+    _, t_max, cfg = _prepare(stack, state, None, t_max, solver, tolerances, max_steps, adjoint, save_steps=False,
+                             until=until)
     return _launch_jit(stack, state, t_max, cfg, replay)
 
 

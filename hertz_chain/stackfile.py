@@ -139,7 +139,7 @@ _CONTACT_KEYS = (
 )
 _SOLVER_KEYS = ("solver", "rtol", "atol", "t_max", "until", "max_steps", "n_output", "dt_output")
 #: `solver.until`: stop when the first cascade ends, or go on to `t_max` and report rebounds.
-UNTIL = ("cascade", "t_max")
+UNTIL = ("cascade", "t_max", "launch")
 
 # dimension name -> (a unit of that dimension, how the error message describes it)
 _DIMENSIONS = {

@@ -159,6 +159,25 @@ def test_touching_three_mass_optimum_matches_independent_scipy_optimum(tmp_path)
     assert result.top_velocity_gain > result.rigid_designs["mvg"].top_velocity_gain
 
 
+def test_wide_gaps_recover_the_mvg_design(tmp_path):
+    """Independent collisions (gaps 5 cm, g = 0), Tsuji e = 0.8, n = 6, end masses 8.4 kg and 0.1008 kg,
+    from a start 20-30 % off: the optimum is the paper's MVG stack, m_i = m_1 R^((i-1)/(n-1)) (Eq 15),
+    with the gain (1+e)^n / (1 + R^(1/(n-1)))^(n-1) - 1 (Eq 20)."""
+    n, e, m1, mn = 6, 0.8, 8.4, 0.1008
+    R = mn / m1
+    mvg = m1 * R ** (np.arange(n) / (n - 1))
+    start = mvg * np.array([1, 1.3, 0.8, 1.2, 0.7, 1])
+    doc = _stack_doc("tsuji", gravity=0, gaps="5 cm", masses=start.tolist())
+    doc["optimize"] = {"starts": 1, "screen": 0,
+                       "vary": [{"key": "stack.masses", "bounds": ["50 g", "10 kg"]}]}
+    result = optimize(_write(tmp_path, doc))
+    gain = (1 + e) ** n / (1 + R ** (1 / (n - 1))) ** (n - 1) - 1
+    assert result.status.ok
+    np.testing.assert_allclose(result.masses, mvg, rtol=1e-3)
+    assert result.top_velocity_gain == pytest.approx(gain, rel=1e-5)
+    assert result.convergence["gradient"] == "batched central differences"  # Tsuji: LawRow.smooth_onset
+
+
 def test_condition_b_inverse_design_and_the_written_file(tmp_path, capsys):
     """MIL-STD-883 Method 2002 condition B (1500 g, 0.5 ms half-sine) on a 100 g top mass, under gravity:
     the written stack file, re-simulated by `hertz-chain simulate`, meets it within 2 % in peak and in

@@ -7,6 +7,7 @@ from _helpers import mvg as _mvg
 from scipy.integrate import solve_ivp
 from scipy.special import beta
 
+import hertz_chain as hc
 from hertz_chain.contact import Hertz, HuntCrossley, KelvinVoigt, Tsuji
 from hertz_chain.errors import ParameterError
 from hertz_chain.simulate import Tolerances, restitution, simulate
@@ -195,3 +196,27 @@ def test_bad_options_raise_parameter_error():
         Tolerances(rtol=0.0)
     with pytest.raises(ParameterError):
         restitution(Hertz(1e9), -1.0, 1.0)
+
+
+def test_until_launch_ends_a_gapped_stack_without_gravity_once_the_top_is_final():
+    """Six masses 5 cm apart, no gravity, Tsuji e = 0.8 (speed-independent): the collisions are
+    independent, so the top's launch gain is paper Eq 19, prod form with e = 0.8, written out here. The
+    two bottom masses keep drifting together for seconds (mass 1 slightly faster), so the full cascade
+    is not over by the default t_max; `until="launch"` stops as soon as nothing below can catch the top."""
+    m = np.array([8.4, 3.47, 1.43, 0.59, 0.244, 0.1008])
+    e = 0.8
+    laws = [hc.make_law("tsuji", stiffness=1e9, restitution=e, effective_mass=float(me))
+            for me in np.concatenate([m[:1], m[:-1] * m[1:] / (m[:-1] + m[1:])])]
+    stack = hc.Stack(m, laws, gravity=0.0)
+    state = hc.at_impact(stack, 1.0, 0.05)
+    tol = hc.Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True)
+    r = m[1:] / m[:-1]
+    eq19 = (1 + e) * np.prod((1 + e) / (1 + r)) - 1
+    full = hc.simulate(stack, state, throw=False, tolerances=tol)
+    assert full.status is hc.Status.INCOMPLETE_T_MAX
+    sol = hc.simulate(stack, state, tolerances=tol, until="launch")
+    assert sol.status is hc.Status.COMPLETE
+    assert sol.t_final < 0.2 * full.t_final
+    assert sol.launch_velocities[-1] == pytest.approx(eq19, rel=1e-8)
+    v = hc.launch_velocity(stack, state, until="launch")
+    assert float(v[-1]) == pytest.approx(eq19, rel=1e-8)
