@@ -26,6 +26,7 @@ docs: $(STAMP)
 # Full benchmark suite (~15 min on 2 cores): writes benchmarks/results.md and the raw JSON.
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py --output benchmarks/results.md --json benchmarks/results.json
+	$(BIN)/python benchmarks/optimize.py --output benchmarks/optimize.md
 
 # A one-minute smoke run (n = 2, one regime) into out/; CI runs the same through tests/test_benchmarks_smoke.py.
 bench-smoke: $(STAMP)

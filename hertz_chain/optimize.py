@@ -572,6 +572,7 @@ class OptimizeResult:
     seconds: float
     doc: dict = dataclasses.field(repr=False, default_factory=dict)
     source: str | None = None
+    gaps: tuple[float, ...] = ()
 
     @property
     def masses(self) -> np.ndarray:
@@ -621,9 +622,8 @@ class OptimizeResult:
         }
 
     def _gaps(self) -> list:
-        """The gaps (m) of the best stack, from its stack file."""
-        gaps = self.doc.get("stack", {}).get("gaps", 0.0)
-        return gaps if isinstance(gaps, list) else [gaps] * (self.n - 1)
+        """The n - 1 gaps (m) of the best stack."""
+        return list(self.gaps)
 
 
 def _set_interface(doc: dict, j: int, key: str, value: float) -> None:
@@ -782,4 +782,5 @@ def optimize(path: str | Path) -> OptimizeResult:
         variables={s.label: float(v) for s, v in zip(space.slots, x)}, report=report, start=start,
         rigid_designs=rigid, convergence=convergence, evaluations=evaluations + ev.count,
         seconds=time.perf_counter() - t0, doc=doc_best, source=str(path),
+        gaps=tuple(float(g) for g in np.asarray(space.dm.fields(x)["stack.gaps"])),
     )

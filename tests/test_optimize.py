@@ -250,3 +250,35 @@ def test_write_never_replaces_the_input_or_an_existing_file(tmp_path, capsys):
     code, _, err = _cli(["optimize", str(path), "--write", str(existing)], capsys)
     assert code == 2 and "--force" in err
     assert path.read_text() == before and existing.read_text() == "mine"
+
+
+def test_numbers_of_masses_are_compared_and_the_best_wins(tmp_path):
+    """Wide gaps (independent collisions), g = 0, Hunt–Crossley e = 0.8 calibrated at each interface's
+    rigid approach speed (so every collision has e = 0.8, whatever the masses): with n = [3, 4] and end
+    masses 8.4 kg and 0.1008 kg (R = 0.012, for which the paper's optimal n is 6, so the gain still grows
+    from 3 to 4), the optimum has 4 masses and paper Eq 20's gain for n = 4, through the reverse-mode
+    gradient (Hunt–Crossley's onset is smooth)."""
+    e, m1, mn = 0.8, 8.4, 0.1008
+    R = mn / m1
+    doc = _stack_doc("hunt-crossley", gravity=0, gaps="5 cm", masses=[m1, 1.0, mn])
+    doc["optimize"] = {"n": [3, 4], "starts": 1, "screen": 0,
+                       "vary": [{"key": "stack.masses", "bounds": ["50 g", "10 kg"]}]}
+    result = optimize(_write(tmp_path, doc))
+    eq20 = lambda n: (1 + e) ** n / (1 + R ** (1 / (n - 1))) ** (n - 1) - 1  # noqa: E731
+    assert result.status.ok and result.n == 4
+    assert result.convergence["gradient"] == "reverse mode"
+    assert result.top_velocity_gain == pytest.approx(eq20(4), rel=1e-5)
+    np.testing.assert_allclose(result.masses, m1 * R ** (np.arange(4) / 3), rtol=1e-3)
+    assert len(result.gaps) == 3 and result.gaps[0] == pytest.approx(0.05)
+
+
+def test_a_binding_mass_budget_is_met_exactly(tmp_path):
+    """Three masses, wide gaps, g = 0, Tsuji e = 0.8: the unconstrained optimum of the middle mass is the
+    geometric mean sqrt(m1 m3) = 0.3162 kg (Eq 15, n = 3); a budget of 1.25 kg allows at most 0.15 kg,
+    so the optimum sits on the budget: m2 = 1.25 - 1.0 - 0.1 (SLSQP)."""
+    doc = _stack_doc("tsuji", gravity=0, gaps="2 cm", masses=[1.0, 0.12, 0.1])
+    doc["optimize"] = {"total_mass": "1.25 kg", "starts": 1, "screen": 0,
+                       "vary": [{"key": "stack.masses", "bounds": ["10 g", "1 kg"]}]}
+    result = optimize(_write(tmp_path, doc))
+    assert result.status.ok and result.convergence["method"] == "SLSQP"
+    assert result.masses[1] == pytest.approx(0.15, rel=1e-6)
