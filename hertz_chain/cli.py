@@ -234,8 +234,8 @@ def optimize(
     except HertzChainError as exc:
         _fail(str(exc))
     if not result.status.ok:
-        typer.echo(f"hertz-chain: optimize {result.status.text}: the best point found is reported "
-                   f"({_one_line(result.convergence['starts'][0]['message'])})", err=True)
+        typer.echo(f"hertz-chain: optimize {result.status.text}: {_one_line(result.convergence['why'])}; the "
+                   "best point found is reported", err=True)
         raise typer.Exit(code=result.status.exit_code)
 
 

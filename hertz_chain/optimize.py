@@ -53,15 +53,17 @@ from .status import Status
 __all__ = ["OptimizeStatus", "OptimizeSpec", "VarySpec", "OptimizeResult", "optimize", "read_optimize_file",
            "OBJECTIVES", "prepare"]
 
-OBJECTIVES = ("gain", "pulse")
-"""`gain`: maximise the top mass's launch gain; `pulse`: hit a target top pulse (peak g and duration)."""
+OBJECTIVES = ("gain", "pulse", "srs")
+"""`gain`: maximise the top mass's launch gain; `pulse`: hit a target top pulse (peak g and duration);
+`srs`: fit the top pulse's shock response spectrum to a target table, within ±`srs_tolerance_db`."""
 
 DURATIONS = ("half-sine", "10%")
 """How a pulse's duration is read: the equivalent half-sine duration `pi dV / (2 peak)`, or between the
 10 % points (`hertz_chain.pulse`)."""
 
 _OPTIMIZE_KEYS = ("objective", "n", "starts", "screen", "seed", "max_iterations", "total_mass", "fix_ends",
-                  "max_peak_g", "max_peak_force", "target_peak_g", "target_duration", "duration", "vary")
+                  "max_peak_g", "max_peak_force", "target_peak_g", "target_duration", "duration", "target_srs",
+                  "srs_tolerance_db", "srs_q", "vary")
 _VARY_KEYS = ("key", "index", "bounds")
 MAX_STARTS = 64
 PG_TOLERANCE = 1e-4
@@ -116,12 +118,15 @@ class OptimizeSpec:
     max_peak_g: float | None = None
     max_peak_force: float | None = None
     target_peak_g: float | None = None
+    target_srs: tuple[tuple[float, float], ...] | None = None
+    srs_tolerance_db: float = 3.0
+    srs_q: float = 10.0
     target_duration: float | None = None
     duration: str = "half-sine"
 
     @property
     def needs_pulse(self) -> bool:
-        return self.objective == "pulse" or self.max_peak_g is not None or self.max_peak_force is not None
+        return self.objective in ("pulse", "srs") or self.max_peak_g is not None or self.max_peak_force is not None
 
 
 # ------------------------------------------------------------------------------------------ parsing
@@ -146,6 +151,38 @@ def _stiffness_dimension(spec: StackSpec, j: int) -> str:
     from .registry import LAWS
 
     return LAWS[spec.contact_for(j).law].stiffness
+
+
+def _parse_srs(raw: dict) -> dict:
+    """`target_srs` (rows `[frequency, level]`: Hz and g, or quantities), `srs_tolerance_db`, `srs_q`."""
+    table = raw.get("target_srs")
+    where = "optimize.target_srs"
+    if not isinstance(table, list) or len(table) < 2:
+        raise _err(where, "missing or too short; give rows [frequency, level], e.g. [[100, 50], [1000, 1500]] "
+                   "(Hz and g), at least two")
+    rows = []
+    for i, row in enumerate(table):
+        if not isinstance(row, list) or len(row) != 2:
+            raise _err(f"{where}[{i}]", f"{row!r} is invalid: a row [frequency, level]")
+        f = row[0]
+        if isinstance(f, bool) or not isinstance(f, (int, float)) or not (math.isfinite(f) and 1e-3 <= f <= 1e6):
+            raise _err(f"{where}[{i}][0]", f"{row[0]!r} is invalid: a frequency in Hz, 1e-3 to 1e6")
+        a = row[1]
+        if isinstance(a, bool) or not isinstance(a, (int, float)) or not (math.isfinite(a) and 0 < a <= 1e8):
+            raise _err(f"{where}[{i}][1]", f"{row[1]!r} is invalid: a level in g, > 0")
+        rows.append((float(f), float(a)))
+    freqs = [r[0] for r in rows]
+    if any(b <= a for a, b in zip(freqs, freqs[1:])):
+        raise _err(where, "the frequencies must increase from row to row")
+    out = {"target_srs": tuple(rows)}
+    if "srs_tolerance_db" in raw:
+        out["srs_tolerance_db"] = _positive(raw["srs_tolerance_db"], "optimize.srs_tolerance_db", "dimensionless")
+    if "srs_q" in raw:
+        q = _positive(raw["srs_q"], "optimize.srs_q", "dimensionless")
+        if not 0.5 < q <= 1000:
+            raise _err("optimize.srs_q", f"{raw['srs_q']!r} is invalid: Q between 0.5 and 1000")
+        out["srs_q"] = q
+    return out
 
 
 def parse_optimize(raw: Any, spec: StackSpec) -> OptimizeSpec:
@@ -203,6 +240,12 @@ def parse_optimize(raw: Any, spec: StackSpec) -> OptimizeSpec:
         if raw["duration"] not in DURATIONS:
             raise _err("optimize.duration", f"{raw['duration']!r} is invalid; allowed: {', '.join(DURATIONS)}")
         out["duration"] = raw["duration"]
+    if objective == "srs":
+        out.update(_parse_srs(raw))
+    else:
+        for key in ("target_srs", "srs_tolerance_db", "srs_q"):
+            if key in raw:
+                raise _err(f"optimize.{key}", "used only with objective = 'srs'")
     if objective == "pulse":
         for key in ("target_peak_g", "target_duration"):
             if key not in out:
@@ -351,6 +394,18 @@ def _space(spec: StackSpec, doc: dict, problem: OptimizeSpec, n: int) -> _Space:
 
 
 # ------------------------------------------------------------------------------------------ objectives
+def _objective(p: OptimizeSpec, mt: dict) -> float:
+    """The value minimised on the exact path: the negative gain (with peak limits); the sum of the squared
+    relative misses of the peak and the duration (`pulse`); the mean squared SRS error in units of the
+    tolerance band (`srs`: 1 = every frequency on the band's edge)."""
+    if p.objective == "pulse":
+        return (mt["peak_g"] / p.target_peak_g - 1.0) ** 2 + (mt["duration"] / p.target_duration - 1.0) ** 2
+    if p.objective == "srs":
+        return float(np.mean((mt["srs_error_db"] / p.srs_tolerance_db) ** 2))
+    return -mt["gain"]
+
+
+
 class _Evaluator:
     """The objective and constraints of one `_Space`, compiled once and reused for every start."""
 
@@ -448,16 +503,36 @@ class _Evaluator:
             return out | {"ok": False}
         dur = pm.equivalent_half_sine_duration if self.problem.duration == "half-sine" else pm.duration_10
         out.update(peak_g=pm.peak / 9.80665, duration=dur, peak_force=float(np.max(st.forces[keep])))
+        if self.problem.objective == "srs":
+            out["srs_error_db"] = self.srs_error_db(t, a / 9.80665)
         return out
+
+    def srs_frequencies(self) -> tuple[np.ndarray, np.ndarray]:
+        """The natural frequencies of the SRS fit (1/12 octave across the target table, at most 120)
+        and the target there (log-log interpolation of the table), g."""
+        f_t, a_t = (np.array(c) for c in zip(*self.problem.target_srs))
+        count = min(120, max(2, int(np.ceil(12 * np.log2(f_t[-1] / f_t[0]))) + 1))
+        f = np.geomspace(f_t[0], f_t[-1], count)
+        return f, np.exp(np.interp(np.log(f), np.log(f_t), np.log(a_t)))
+
+    def srs_error_db(self, t, a_g) -> np.ndarray:
+        """`20 log10(SRS / target)` of the top pulse at `srs_frequencies` (maximax, Q = `srs_q`)."""
+        import warnings
+
+        from .srs import srs
+
+        f, target = self.srs_frequencies()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            s = srs(t, a_g, f, Q=self.problem.srs_q, on_coarse="ignore")
+        return 20.0 * np.log10(np.maximum(s.maximax, 1e-300) / target)
 
     def pulse_objective(self, u) -> float:
         p = self.problem
         mt = self.metrics(u)
         if not mt["ok"]:
             return 1e3
-        if p.objective == "pulse":
-            return (mt["peak_g"] / p.target_peak_g - 1.0) ** 2 + (mt["duration"] / p.target_duration - 1.0) ** 2
-        return -mt["gain"]
+        return _objective(p, mt)
 
     def pulse_constraints(self, u) -> np.ndarray:
         """Constraint values >= 0 where feasible (relative margins)."""
@@ -753,18 +828,28 @@ def optimize(path: str | Path) -> OptimizeResult:
     agree = sum(abs(r.value - top.value) <= 1e-6 * max(abs(top.value), 1e-2) for r in runs)
     active = [s.label + (" (lower)" if ui <= 1e-9 else " (upper)") for s, ui in zip(space.slots, top.u)
               if ui <= 1e-9 or ui >= 1 - 1e-9]
+    extra = {}
     if problem.objective == "gain":
         value = -report.top_velocity_gain
     else:
         mt = ev.metrics(top.u)
-        value = (mt["peak_g"] / problem.target_peak_g - 1) ** 2 + (mt["duration"] / problem.target_duration - 1) ** 2 \
-            if mt["ok"] else math.inf
+        value = _objective(problem, mt) if mt["ok"] else math.inf
+        if problem.objective == "srs" and mt["ok"]:
+            err = mt["srs_error_db"]
+            extra = {"srs_max_error_db": float(np.max(np.abs(err))),
+                     "srs_within_tolerance": bool(np.max(np.abs(err)) <= problem.srs_tolerance_db)}
     # a line search that can make no more progress at a point whose projected gradient vanishes (to the
     # gradient's own accuracy, ~1e-6 relative) has converged too (L-BFGS-B reports it as "ABNORMAL")
     stationary = math.isfinite(pg) and pg <= PG_TOLERANCE * max(1.0, abs(top.value))
     status = OptimizeStatus.CONVERGED if (top.success or stationary) else OptimizeStatus.NOT_CONVERGED
+    why = "" if status.ok else f"the search stopped: {top.message}"
+    if extra and not extra["srs_within_tolerance"]:
+        status = OptimizeStatus.NOT_CONVERGED
+        why = (f"the best SRS found misses the target by up to {extra['srs_max_error_db']:.2f} dB, beyond "
+               f"±{problem.srs_tolerance_db:g} dB")
     if not report.status.ok or not math.isfinite(value):
         status = OptimizeStatus.FAILED
+        why = f"the best design could not be simulated ({report.status.text})"
     convergence = {
         "method": ("COBYQA" if problem.needs_pulse else ("SLSQP" if problem.total_mass else "L-BFGS-B")),
         "gradient": None if problem.needs_pulse else ev.gradient,
@@ -776,6 +861,8 @@ def optimize(path: str | Path) -> OptimizeResult:
         "active_bounds": active,
         "history": top.history,
         "n_tried": list(ns),
+        "why": why,
+        **extra,
     }
     return OptimizeResult(
         status=status, objective=problem.objective, objective_value=float(value), n=space.n,

@@ -327,4 +327,9 @@ def optimize_table(result) -> str:
               f"{result.evaluations} evaluations, {result.seconds:.1f} s",
               f"  projected-gradient norm {pg:.3g}" if pg is not None and pg == pg else "  (derivative-free)",
               "  active bounds: " + (", ".join(c["active_bounds"]) or "none")]
+    if "srs_max_error_db" in c:
+        lines.append(f"  SRS: largest miss {c['srs_max_error_db']:.2f} dB "
+                     f"({'within' if c['srs_within_tolerance'] else 'outside'} the tolerance band)")
+    if c.get("why"):
+        lines.append(f"  {c['why']}")
     return "\n".join(lines)

@@ -191,8 +191,10 @@ def test_condition_b_inverse_design_and_the_written_file(tmp_path, capsys):
                                  {"key": "contact.stiffness", "index": [1], "bounds": ["1e6 N/m^1.5", "1e10 N/m^1.5"]}]}}
     path = _write(tmp_path, doc)
     out = tmp_path / "best.toml"
-    code, text, err = _cli(["optimize", str(path), "--json", "--write", str(out)], capsys)
+    png = tmp_path / "convergence.png"
+    code, text, err = _cli(["optimize", str(path), "--json", "--write", str(out), "--plot", str(png)], capsys)
     assert code == 0, err
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     res = json.loads(text)
     for key in ("status", "objective_value", "top_velocity_gain", "masses", "gaps", "start", "rigid_designs",
                 "evaluations", "convergence"):
@@ -225,6 +227,12 @@ BASE = {"drop": {"impact_velocity": "1 m/s"}, "stack": {"masses": [1.0, 0.3, 0.1
     ({"objective": "speed", "vary": [{"key": "drop.impact_velocity", "bounds": ["1 m/s", "2 m/s"]}]},
      ["objective", "'speed'", "gain, pulse"]),
     ({}, ["optimize.vary", "missing"]),
+    ({"objective": "srs", "vary": [{"key": "drop.impact_velocity", "bounds": ["1 m/s", "2 m/s"]}]},
+     ["target_srs", "missing"]),
+    ({"objective": "srs", "target_srs": [[1000, 10], [100, 20]],
+      "vary": [{"key": "drop.impact_velocity", "bounds": ["1 m/s", "2 m/s"]}]}, ["target_srs", "increase"]),
+    ({"target_srs": [[100, 10], [1000, 20]], "vary": [{"key": "drop.impact_velocity", "bounds": ["1 m/s", "2 m/s"]}]},
+     ["target_srs", "only with objective = 'srs'"]),
     ({"starts": 0, "vary": [{"key": "drop.impact_velocity", "bounds": ["1 m/s", "2 m/s"]}]}, ["starts", "1 to 64"]),
     ({"vary": [{"key": "drop.impact_velocity", "index": 1, "bounds": ["1 m/s", "2 m/s"]}]}, ["single number"]),
 ])
@@ -282,3 +290,63 @@ def test_a_binding_mass_budget_is_met_exactly(tmp_path):
     result = optimize(_write(tmp_path, doc))
     assert result.status.ok and result.convergence["method"] == "SLSQP"
     assert result.masses[1] == pytest.approx(0.15, rel=1e-6)
+
+
+def test_gain_under_a_peak_g_limit_sits_on_the_limit(tmp_path):
+    """Two touching masses under gravity, the top mass varied (fix_ends = false): a lighter top mass
+    leaves faster and feels a higher peak, so the best gain under `max_peak_g = 2000` has its peak on
+    the limit (COBYQA on the exact post-processor), and the written file, re-simulated, says so."""
+    doc = {"drop": {"impact_velocity": "2 m/s"}, "stack": {"masses": ["1 kg", "200 g"], "gaps": 0},
+           "contact": {"law": "tsuji", "stiffness": "1e8 N/m^1.5", "restitution": 0.8,
+                       "ground": {"stiffness": "1e10 N/m^1.5"}},
+           "optimize": {"max_peak_g": 2000, "fix_ends": False, "starts": 1, "screen": 0,
+                        "vary": [{"key": "stack.masses", "index": [2], "bounds": ["20 g", "500 g"]}]}}
+    result = optimize(_write(tmp_path, doc))
+    assert result.status.ok and result.convergence["method"] == "COBYQA"
+    peak = result.report.top_pulse.peak / G0
+    assert peak == pytest.approx(2000, rel=1e-3) and peak <= 2000 * (1 + 1e-6)
+    assert result.top_velocity_gain > result.start.top_velocity_gain  # the start (200 g) was below the limit
+    assert result.start.top_pulse.peak / G0 < 2000
+
+
+def _sdof_srs(t, a, freqs, Q=10.0, pad=0.03):
+    """Maximax absolute-acceleration SRS of the base acceleration `a(t)`, computed here with
+    scipy.signal.lsim of H(s) = (2 zeta w s + w^2)/(s^2 + 2 zeta w s + w^2) on a 1 us grid (linear
+    interpolation of the input), the record padded with `pad` s of zeros for the residual response."""
+    from scipy import signal
+
+    dt = 1e-6
+    tu = np.arange(0.0, t[-1] - t[0] + pad, dt)
+    au = np.interp(tu, t - t[0], a, right=0.0)
+    zeta = 1 / (2 * Q)
+    out = []
+    for f in freqs:
+        w = 2 * np.pi * f
+        _, y, _ = signal.lsim(([2 * zeta * w, w * w], [1.0, 2 * zeta * w, w * w]), au, tu, interp=True)
+        out.append(np.max(np.abs(y)))
+    return np.array(out)
+
+
+def test_srs_objective_fits_the_half_sine_srs_of_condition_b(tmp_path, capsys):
+    """Target: the SRS (Q = 10) of the ideal 1500 g, 0.5 ms half-sine of condition B, 100 Hz – 5 kHz,
+    computed here by lsim of the single-degree-of-freedom system. The optimised stack's top pulse,
+    re-simulated from the written file and put through the same lsim, stays within ±3 dB of it."""
+    freqs = np.geomspace(100, 5000, 12)
+    th = np.linspace(0, 0.5e-3, 2001)
+    target = _sdof_srs(th, 1500 * np.sin(np.pi * th / 0.5e-3), freqs)
+    doc = {"drop": {"impact_velocity": "2 m/s"}, "stack": {"masses": ["1 kg", "100 g"], "gaps": 0},
+           "contact": {"law": "tsuji", "stiffness": "1e8 N/m^1.5", "restitution": 0.8,
+                       "ground": {"stiffness": "1e10 N/m^1.5"}},
+           "optimize": {"objective": "srs", "target_srs": [[float(f), float(a)] for f, a in zip(freqs, target)],
+                        "srs_tolerance_db": 3, "starts": 1, "screen": 0,
+                        "vary": [{"key": "drop.impact_velocity", "bounds": ["0.5 m/s", "5 m/s"]},
+                                 {"key": "contact.stiffness", "index": [1], "bounds": ["1e6 N/m^1.5", "1e10 N/m^1.5"]}]}}
+    out = tmp_path / "best.toml"
+    code, text, err = _cli(["optimize", str(_write(tmp_path, doc)), "--json", "--write", str(out)], capsys)
+    assert code == 0, err
+    assert json.loads(text)["convergence"]["srs_within_tolerance"]
+    sol = hc.simulate_file(out).solution
+    st, g = sol.steps, float(sol.stack.gravity)
+    keep = np.isfinite(st.t)
+    got = _sdof_srs(st.t[keep], (st.accelerations[keep, -1] + g) / G0, freqs)
+    assert np.max(np.abs(20 * np.log10(got / target))) < 3.0
