@@ -7,6 +7,8 @@ Commands:
   file and compare with the rigid model.
 - `hertz-chain optimize STACK.toml [--json] [--write OUT.toml] [--plot F.png]` — the best stack under
   compliant contacts (`hertz_chain.optimize`; exit 0 converged, 3 not converged, 5 failed).
+- `hertz-chain sweep STACK.toml --output OUT.zarr [--workers N | --scheduler ADDR] [--resume] [--json]` —
+  a design space into a Zarr store that survives a kill (`hertz_chain.sweep`).
 - `hertz-chain demo` — the paper's optimal six-mass MVG stack, gapped and touching.
 
 Every user error (bad file, bad parameter, bad path, unknown command or flag, missing argument) prints
@@ -237,6 +239,50 @@ def optimize(
         typer.echo(f"hertz-chain: optimize {result.status.text}: {_one_line(result.convergence['why'])}; the "
                    "best point found is reported", err=True)
         raise typer.Exit(code=result.status.exit_code)
+
+
+@app.command()
+def sweep(
+    stack_file: Path = typer.Argument(..., help="Stack file with [sweep] and [[sweep.axis]] (docs/sweeps.md)."),
+    output: Path = typer.Option(..., "--output", "-o", help="The Zarr store to write (a folder ending in .zarr)."),
+    workers: Optional[int] = typer.Option(None, "--workers", help="Run on a local Dask cluster of N worker processes."),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Run on an existing Dask cluster (tcp://host:port)."),
+    resume: bool = typer.Option(False, "--resume", help="Continue a killed sweep (the same command does it too)."),
+    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
+) -> None:
+    """Sweep a design space: every design of the [[sweep.axis]] grid or samples, into a Zarr store that survives a kill."""
+    from .sweep import check
+
+    try:
+        if workers is not None and scheduler is not None:
+            _fail("--workers: give --workers or --scheduler, not both")
+        _check_number(workers, "--workers", 1, 1024, "a number of worker processes from 1 to 1024")
+        if scheduler is not None and "://" not in scheduler:
+            _fail(f"--scheduler = {scheduler!r} is invalid: a Dask scheduler address such as tcp://host:8786")
+        plan, _ = check(stack_file, output)
+        if resume and not output.exists():
+            _fail(f"--resume: {output} does not exist yet; run without --resume to start the sweep")
+    except HertzChainError as exc:
+        _fail(str(exc))
+    per_design = 8 * (len(plan.sweep.axes) + 8 + plan.spec.n)
+    typer.echo(f"hertz-chain: sweep: {plan.size} designs in {plan.n_chunks} chunks; about "
+               f"{plan.size * per_design / 1e6:.3g} MB uncompressed", err=True)
+    from .sweep import sweep as run_sweep
+
+    try:
+        result = run_sweep(stack_file, output, workers=workers, scheduler=scheduler, progress=sys.stderr.isatty())
+    except HertzChainError as exc:
+        _fail(str(exc))
+    summary = result.to_dict()
+    if as_json:
+        from .report import to_json
+
+        typer.echo(to_json(summary))
+    else:
+        rate = f", {summary['designs_per_second']:.3g} designs/s" if result.computed else ""
+        counts = ", ".join(f"{k} {v}" for k, v in result.status_counts.items())
+        typer.echo(f"{result.path}: {result.designs} designs; {result.computed} chunks computed, {result.skipped} "
+                   f"already done{rate}" + (f"; this run: {counts}" if counts else ""))
 
 
 @app.command()

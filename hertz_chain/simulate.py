@@ -318,6 +318,13 @@ def launch_velocity(
     finite differences to 3.5e-6 (module docstring). A failed solve raises an error at run time
     (`eqx.error_if`), never a silent NaN.
 
+    **Laws whose onset is not smooth** (`registry.LawRow.smooth_onset` is False: Tsuji, Kelvin–Voigt,
+    viscoelastic): their `delta^(1/4)`, `sqrt(delta)` or jumping dashpot term has an unbounded derivative
+    where a contact closes, and reverse mode over the accepted steps differentiates that poorly: measured
+    against central differences, 1e-4 to 2e-3 relative for a touching stack and up to order 1 with gaps
+    (`benchmarks/optimize.md`). For those, difference the values (as `hertz_chain.optimize` does, in one
+    batched solve); Hertz and Hunt–Crossley gradients match central differences to 1e-5.
+
     `adjoint`: `"reverse"` (default; `jax.grad` by replaying the accepted steps, module docstring;
     reverse mode only), `"forward"` (`jax.jacfwd`, `jax.jvp`), or a diffrax adjoint, e.g.
     `diffrax.RecursiveCheckpointAdjoint()` for higher-order derivatives.

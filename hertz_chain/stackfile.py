@@ -120,8 +120,9 @@ DAMPING_LIMITS = {name: (row.damping_max, f" {_UNITS[row.damping_dimension]}" if
 DESIGN_KINDS = ("mvg", "met")
 SHAPES = ("sphere", "flat")
 
-_TOP_KEYS = ("title", "drop", "stack", "ground", "contact", "materials", "solver", "optimize")
-# `optimize` is read by `hertz_chain.optimize` (docs/optimize.md); simulating such a file runs its starting stack
+_TOP_KEYS = ("title", "drop", "stack", "ground", "contact", "materials", "solver", "optimize", "sweep")
+# `optimize` and `sweep` are read by `hertz_chain.optimize` and `hertz_chain.sweep` (docs/optimize.md,
+# docs/sweeps.md); simulating such a file runs its base stack
 _DROP_KEYS = ("ground", "impact_velocity", "height", "gravity")
 _STACK_KEYS = ("masses", "design", "gaps", "velocities", "preload", "material", "radius", "shape")
 _DESIGN_KEYS = ("kind", "n", "restitution", "bottom_mass", "top_mass", "mass_ratio")

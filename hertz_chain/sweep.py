@@ -1,0 +1,624 @@
+"""Parameter sweeps: `hertz-chain sweep FILE.toml --output OUT.zarr` and `sweep(path, output)`.
+
+A stack file with `[sweep]` and `[[sweep.axis]]` tables (docs/sweeps.md) names the axes by the key
+vocabulary of `hertz_chain.keys` (the same keys and indices as `[[optimize.vary]]`). The designs are
+evaluated in chunks, each chunk one compiled, vmapped `simulate_batch(save_steps=False)` of the
+differentiable design map (`hertz_chain._design.DesignMap`), locally or on a Dask cluster, and written
+into an xarray Dataset in a Zarr store as they finish.
+
+**Layout.** A grid sweep (`combine = "product"`, the default) has one dimension per axis, named by the
+axis label (`contact.stiffness`, `stack.masses[2]`), with coordinates in SI; the work chunks are slabs
+along the first axis (whole rows of the others), so each chunk is one rectangular region. Zipped axes
+and sampled designs (`sample = "sobol"`, `"lhs"`, `"montecarlo"`) have one `design` dimension, the
+sampled values as variables.
+
+**Survives a kill.** A chunk's results are written first, then its marker: element `c` of the store's
+`chunk_done` array (int8, one uncompressed one-byte Zarr chunk per element, so its file either holds the
+byte 1 or is missing or empty). A run of the same command on an existing store computes only the chunks
+without a marker (a chunk killed mid-write has none, and is written again whole), so nothing is lost or
+done twice and the final store equals an uninterrupted run's. The store records the SHA-256 of the stack file's sweep-relevant content; a different file or
+spec is refused in one line.
+
+Variables (per design): `status` (`hertz_chain.status.Status` codes), `top_velocity_gain`,
+`velocity_gains` (per mass), `rigid_gain` (paper Eq 19 with the nominal restitutions) and
+`rigid_deficit` (`top_velocity_gain / rigid_gain - 1`), `energy_error`, `num_steps`, `t_final`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import itertools
+import json
+import math
+import os
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import StackFileError
+from .keys import KEYS, Slot, resolve
+from .stackfile import StackSpec, load_stack_file, parse_quantity
+
+__all__ = ["SweepSpec", "AxisSpec", "SweepResult", "read_sweep_file", "check", "sweep", "COMBINE", "SAMPLES"]
+
+COMBINE = ("product", "zip")
+SAMPLES = ("sobol", "lhs", "montecarlo")
+DISTRIBUTIONS = ("normal", "uniform")
+_SWEEP_KEYS = ("combine", "sample", "samples", "seed", "chunk", "axis")
+_AXIS_KEYS = ("key", "index", "values", "space", "start", "stop", "num", "bounds", "distribution", "std")
+MAX_DESIGNS = 100_000_000
+VARIABLES = {  # name -> (units, long name)
+    "status": ("1", "run status code (hertz_chain.status.Status: 0 complete, 1 with rebounds, 2-3 incomplete, "
+               "4 no contact, 5 failed)"),
+    "top_velocity_gain": ("1", "launch velocity of the top mass over the drop speed"),
+    "velocity_gains": ("1", "launch velocity of each mass over the drop speed"),
+    "rigid_gain": ("1", "rigid independent-collision gain, seed paper Eq 19, nominal restitutions"),
+    "rigid_deficit": ("1", "top_velocity_gain / rigid_gain - 1"),
+    "energy_error": ("1", "largest relative energy-audit error"),
+    "num_steps": ("1", "solver steps"),
+    "t_final": ("s", "end time of the run"),
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class AxisSpec:
+    """One `[[sweep.axis]]`: its slots (one value shared by all the slots of the axis), its values (SI;
+    grid axes), or its sampling (`bounds`, or `distribution` with `std` around the file's value)."""
+
+    key: str
+    index: Any
+    values: tuple[float, ...] | None
+    bounds: tuple[float, float] | None
+    distribution: str | None
+    std: float | None
+    where: str
+
+    @property
+    def label(self) -> str:
+        if self.index is None:
+            return self.key
+        idx = self.index if isinstance(self.index, list) else [self.index]
+        return f"{self.key}[{','.join(str(i) for i in idx)}]"
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepSpec:
+    """`[sweep]`, validated (docs/sweeps.md)."""
+
+    axes: tuple[AxisSpec, ...]
+    combine: str = "product"
+    sample: str | None = None
+    samples: int = 0
+    seed: int = 0
+    chunk: int = 1024
+
+
+def _err(key: str, problem: str) -> StackFileError:
+    return StackFileError(f"{key}: {problem}")
+
+
+def _dimension(spec: StackSpec, key: str, index) -> str:
+    from .registry import LAWS
+
+    dim = KEYS[key].dimension
+    if dim != "stiffness":
+        return dim
+    idx = index if isinstance(index, list) else [index]
+    j = next((i for i in idx if isinstance(i, int) and not isinstance(i, bool)), 1)
+    return LAWS[spec.contact_for(j).law].stiffness
+
+
+def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisSpec:
+    where = f"sweep.axis[{i}]"
+    if not isinstance(item, dict):
+        raise _err(where, f"expected a table, got {item!r}")
+    for k in item:
+        if k not in _AXIS_KEYS:
+            raise _err(f"{where}.{k}", f"unknown key; allowed: {', '.join(_AXIS_KEYS)}")
+    if "key" not in item:
+        raise _err(f"{where}.key", "missing; the stack-file key to sweep, e.g. 'stack.gaps'")
+    key, index = item["key"], item.get("index")
+    n = spec.n or 3
+    resolve(key, index, n=n, ground=spec.has_ground, where=where)  # the key and its indices
+    dim = _dimension(spec, key, index)
+    q = lambda raw, k: parse_quantity(raw, dim, f"{where}.{k}")  # noqa: E731
+    values = bounds = distribution = std = None
+    if sample is None:
+        if "values" in item:
+            if any(k in item for k in ("space", "start", "stop", "num")):
+                raise _err(f"{where}.values", "give values, or space with start, stop and num, not both")
+            raw = item["values"]
+            if not isinstance(raw, list) or not raw:
+                raise _err(f"{where}.values", f"{raw!r} is invalid: a non-empty list of values with units")
+            values = tuple(q(v, "values") for v in raw)
+        else:
+            for k in ("start", "stop", "num"):
+                if k not in item:
+                    raise _err(f"{where}.{k}", "missing; give values = [...], or space, start, stop and num")
+            space = item.get("space", "linear")
+            if space not in ("linear", "log"):
+                raise _err(f"{where}.space", f"{space!r} is invalid; allowed: linear, log")
+            num = item["num"]
+            if isinstance(num, bool) or not isinstance(num, int) or not 1 <= num <= 10_000_000:
+                raise _err(f"{where}.num", f"{num!r} is invalid: an integer from 1 to 10000000")
+            a, b = q(item["start"], "start"), q(item["stop"], "stop")
+            if space == "log" and not (a > 0 and b > 0):
+                raise _err(f"{where}.start", "a log axis needs start and stop > 0")
+            values = tuple((np.geomspace(a, b, num) if space == "log" else np.linspace(a, b, num)).tolist())
+    elif sample in ("sobol", "lhs"):
+        raw = item.get("bounds")
+        if not isinstance(raw, list) or len(raw) != 2:
+            raise _err(f"{where}.bounds", f"{raw!r} is invalid: [lower, upper] with units (sample = '{sample}')")
+        bounds = (q(raw[0], "bounds"), q(raw[1], "bounds"))
+        if not bounds[0] < bounds[1]:
+            raise _err(f"{where}.bounds", f"{raw!r} is invalid: the lower bound must be below the upper")
+    else:  # montecarlo
+        distribution = item.get("distribution", "normal")
+        if distribution not in DISTRIBUTIONS:
+            raise _err(f"{where}.distribution", f"{distribution!r} is invalid; allowed: {', '.join(DISTRIBUTIONS)}")
+        if distribution == "normal":
+            if "std" not in item:
+                raise _err(f"{where}.std", "missing; a normal tolerance needs its standard deviation (with units)")
+            std = q(item["std"], "std")
+            if not std > 0:
+                raise _err(f"{where}.std", f"{item['std']!r} is invalid: must be > 0")
+        else:
+            raw = item.get("bounds")
+            if not isinstance(raw, list) or len(raw) != 2:
+                raise _err(f"{where}.bounds", f"{raw!r} is invalid: [lower, upper] with units")
+            bounds = (q(raw[0], "bounds"), q(raw[1], "bounds"))
+            if not bounds[0] < bounds[1]:
+                raise _err(f"{where}.bounds", f"{raw!r} is invalid: the lower bound must be below the upper")
+    return AxisSpec(key, index, values, bounds, distribution, std, where)
+
+
+def parse_sweep(raw: Any, spec: StackSpec) -> SweepSpec:
+    """Validate a `[sweep]` table against the stack file `spec`."""
+    if not isinstance(raw, dict):
+        raise _err("sweep", f"expected a table ([sweep]), got {raw!r}")
+    for k in raw:
+        if k not in _SWEEP_KEYS:
+            raise _err(f"sweep.{k}", f"unknown key; allowed: {', '.join(_SWEEP_KEYS)}")
+    out: dict[str, Any] = {}
+    combine = raw.get("combine", "product")
+    if combine not in COMBINE:
+        raise _err("sweep.combine", f"{combine!r} is invalid; allowed: {', '.join(COMBINE)}")
+    out["combine"] = combine
+    sample = raw.get("sample")
+    if sample is not None and sample not in SAMPLES:
+        raise _err("sweep.sample", f"{sample!r} is invalid; allowed: {', '.join(SAMPLES)}")
+    out["sample"] = sample
+    for k, lo, hi in (("samples", 1, MAX_DESIGNS), ("seed", 0, 2**31 - 1), ("chunk", 1, 1_000_000)):
+        if k in raw:
+            v = raw[k]
+            if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+                raise _err(f"sweep.{k}", f"{v!r} is invalid: an integer from {lo} to {hi}")
+            out[k] = v
+    if sample is not None and "samples" not in out:
+        raise _err("sweep.samples", f"missing; sample = '{sample}' needs the number of samples")
+    if sample is None and "samples" in out:
+        raise _err("sweep.samples", "used only with sample = 'sobol', 'lhs' or 'montecarlo'")
+    axes = raw.get("axis")
+    if not isinstance(axes, list) or not axes:
+        raise _err("sweep.axis", "missing; give at least one [[sweep.axis]] with a key")
+    parsed = tuple(_parse_axis(a, i, spec, sample) for i, a in enumerate(axes))
+    labels = [a.label for a in parsed]
+    if len(set(labels)) != len(labels):
+        raise _err("sweep.axis", f"an axis is given twice ({labels})")
+    if sample is None and combine == "zip" and len({len(a.values) for a in parsed}) > 1:
+        raise _err("sweep.combine", "zipped axes need the same number of values: "
+                   + ", ".join(f"{a.label}: {len(a.values)}" for a in parsed))
+    out["axes"] = parsed
+    spec_ = SweepSpec(**out)
+    if _count(spec_) > MAX_DESIGNS:
+        raise _err("sweep.axis", f"{_count(spec_)} designs; at most {MAX_DESIGNS}")
+    return spec_
+
+
+def _count(s: SweepSpec) -> int:
+    if s.sample is not None:
+        return s.samples
+    if s.combine == "zip":
+        return len(s.axes[0].values)
+    return math.prod(len(a.values) for a in s.axes)
+
+
+def read_sweep_file(path: str | Path) -> tuple[StackSpec, SweepSpec, str]:
+    """`(spec, sweep, text)` of a stack file with a `[sweep]` section. Raises `StackFileError`."""
+    import tomllib
+
+    spec = load_stack_file(path)
+    text = Path(path).read_text(encoding="utf-8-sig")
+    doc = tomllib.loads(text)
+    if "sweep" not in doc:
+        raise StackFileError(f"{path}: sweep: missing; give a [sweep] section with [[sweep.axis]] (docs/sweeps.md)")
+    if spec.stack.masses is None and spec.n is None:
+        raise StackFileError(f"{path}: stack.design: an 'optimal' design leaves n open; a sweep needs a fixed n")
+    try:
+        return spec, parse_sweep(doc["sweep"], spec), text
+    except StackFileError as exc:
+        raise StackFileError(f"{path}: {exc}") from None
+
+
+# ------------------------------------------------------------------------------------------ the plan
+@dataclasses.dataclass
+class _Plan:
+    """The designs of a sweep: the slots of every axis, the grid shape (or one `design` dimension),
+    the chunks and how to produce the values of a chunk without holding them all."""
+
+    spec: StackSpec
+    sweep: SweepSpec
+    slots: tuple[tuple[Slot, ...], ...]  # per axis
+    shape: tuple[int, ...]
+    dims: tuple[str, ...]
+    chunk_rows: int  # along the first dimension
+    base: np.ndarray  # the file's value of every axis
+
+    @property
+    def size(self) -> int:
+        return math.prod(self.shape)
+
+    @property
+    def row(self) -> int:
+        return math.prod(self.shape[1:])
+
+    @property
+    def n_chunks(self) -> int:
+        return -(-self.shape[0] // self.chunk_rows)
+
+    def region(self, c: int) -> slice:
+        return slice(c * self.chunk_rows, min((c + 1) * self.chunk_rows, self.shape[0]))
+
+    def values(self, c: int) -> np.ndarray:
+        """`(designs, axes)` SI values of chunk `c`, in the store's C order."""
+        r = self.region(c)
+        s = self.sweep
+        if s.sample is None and s.combine == "product":
+            idx = np.indices((r.stop - r.start,) + self.shape[1:]).reshape(len(self.shape), -1).T
+            idx[:, 0] += r.start
+            return np.column_stack([np.asarray(a.values)[idx[:, k]] for k, a in enumerate(s.axes)])
+        if s.sample is None:
+            return np.column_stack([np.asarray(a.values)[r] for a in s.axes])
+        return self._samples()[r]
+
+    def _samples(self) -> np.ndarray:
+        from scipy.stats import qmc
+
+        s = self.sweep
+        d = len(s.axes)
+        if s.sample == "sobol":
+            U = qmc.Sobol(d, scramble=True, seed=s.seed).random(s.samples)
+        elif s.sample == "lhs":
+            U = qmc.LatinHypercube(d, seed=s.seed).random(s.samples)
+        else:
+            rng = np.random.default_rng(s.seed)
+            out = np.empty((s.samples, d))
+            for k, a in enumerate(s.axes):
+                if a.distribution == "normal":
+                    out[:, k] = self.base[k] + a.std * rng.standard_normal(s.samples)
+                else:
+                    out[:, k] = rng.uniform(*a.bounds, s.samples)
+            return out
+        lo = np.array([a.bounds[0] for a in s.axes])
+        hi = np.array([a.bounds[1] for a in s.axes])
+        return lo + U * (hi - lo)
+
+
+def _plan(spec: StackSpec, sweep: SweepSpec, n: int) -> _Plan:
+    slots = tuple(resolve(a.key, a.index, n=n, ground=spec.has_ground, where=a.where) for a in sweep.axes)
+    if sweep.sample is None and sweep.combine == "product":
+        shape = tuple(len(a.values) for a in sweep.axes)
+        dims = tuple(a.label for a in sweep.axes)
+    else:
+        shape, dims = (_count(sweep),), ("design",)
+    row = math.prod(shape[1:])
+    rows = max(1, sweep.chunk // max(row, 1))
+    return _Plan(spec, sweep, slots, shape, dims, rows, np.zeros(len(sweep.axes)))
+
+
+# ------------------------------------------------------------------------------------------ evaluation
+_CACHE: dict[str, Any] = {}
+
+
+def _design_map(text: str, source: str | None):
+    """The design map and slot layout of a sweep file, built once per process (workers reuse it)."""
+    import tomllib
+
+    from ._design import DesignMap, with_masses
+    from .build import design_masses
+    from .stackfile import parse_stack
+
+    key = hashlib.sha256(text.encode()).hexdigest()
+    if key not in _CACHE:
+        doc = tomllib.loads(text)
+        spec = parse_stack(doc, source=source)
+        sw = parse_sweep(doc["sweep"], spec)
+        spec = with_masses(spec, design_masses(spec))
+        plan = _plan(spec, sw, spec.n)
+        flat = tuple(s for axis in plan.slots for s in axis)
+        dm = DesignMap(spec, flat)
+        base = dm.values()
+        pos, k = [], 0
+        for axis in plan.slots:
+            pos.append(k)
+            k += len(axis)
+        plan.base = base[pos]
+        _CACHE[key] = (plan, dm, [len(a) for a in plan.slots])
+    return _CACHE[key]
+
+
+def _evaluate(text: str, source: str | None, c: int) -> dict:
+    """The results of chunk `c` (numpy arrays, one entry per design of the chunk)."""
+    import jax
+
+    from .rigid import stack_gain
+    from .simulate import simulate_batch
+
+    plan, dm, widths = _design_map(text, source)
+    V = plan.values(c)
+    X = np.repeat(V, widths, axis=1)  # an axis sets every slot it names to its value
+    B = X.shape[0]
+    size = plan.chunk_rows * plan.row  # pad to the full chunk: one compiled shape for every chunk
+    if B < size:
+        X = np.vstack([X, np.repeat(X[-1:], size - B, axis=0)])
+    stacks, states = jax.vmap(dm)(X)
+    opts = {k: v for k, v in dm.built.simulate_options.items() if k in ("solver", "tolerances", "t_max", "until")}
+    sol = simulate_batch(stacks, states, save_steps=False, max_steps=dm.built.simulate_options.get("max_steps", 16_384),
+                         **opts)
+    fields = jax.vmap(dm.fields)(X)
+    speed = np.asarray(fields["drop.impact_velocity"]) if not dm.chain else \
+        np.full(len(X), dm.drop_speed(None))
+    gains = sol.launch_velocities / speed[:, None]
+    masses = np.asarray(fields["stack.masses"])
+    e = np.asarray(fields["contact.restitution"])
+    if dm.ground:  # paper Eq 19 with the nominal restitutions (1 where a law gives none: elastic or raw)
+        rigid = np.asarray(stack_gain(masses, np.where(np.isfinite(e), e, 1.0)), dtype=float)
+    else:
+        rigid = np.full(len(X), np.nan)
+    out = {"status": sol.status_code.astype(np.int8), "top_velocity_gain": gains[:, -1], "velocity_gains": gains,
+           "rigid_gain": rigid, "rigid_deficit": gains[:, -1] / rigid - 1.0, "energy_error": sol.energy_error,
+           "num_steps": sol.num_steps.astype(np.int64), "t_final": sol.t_final}
+    if plan.dims == ("design",):
+        out["values"] = V
+    return {k: np.asarray(v)[:B] for k, v in out.items()}
+
+
+# ------------------------------------------------------------------------------------------ the store
+def _fingerprint(text: str) -> str:
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _create_store(path: Path, plan: _Plan, text: str, source: str | None) -> None:
+    """The store's layout, coordinates and attributes (no results yet)."""
+    import datetime
+
+    import xarray as xr
+
+    from . import __version__
+
+    n = plan.spec.n
+    dims = plan.dims
+    shape = plan.shape
+    chunks = (plan.chunk_rows,) + shape[1:]
+    data = {}
+    for name, (units, long_name) in VARIABLES.items():
+        extra = ("mass",) if name == "velocity_gains" else ()
+        shp = shape + ((n,) if extra else ())
+        dtype = np.int8 if name == "status" else (np.int64 if name == "num_steps" else np.float64)
+        fill = -1 if dtype is not np.float64 else np.nan
+        import dask.array as da
+
+        data[name] = xr.Variable(dims + extra, da.full(shp, fill, dtype=dtype, chunks=chunks + ((n,) if extra else ())),
+                                 attrs={"units": units, "long_name": long_name})
+    coords = {}
+    if dims != ("design",):
+        for a in plan.sweep.axes:
+            coords[a.label] = xr.Variable((a.label,), np.asarray(a.values),
+                                          attrs={"units": _units(plan.spec, a), "long_name": f"stack-file key {a.label}"})
+    else:
+        import dask.array as da
+
+        for a in plan.sweep.axes:
+            data[a.label] = xr.Variable(("design",), da.full(shape, np.nan, chunks=chunks),
+                                        attrs={"units": _units(plan.spec, a), "long_name": f"sampled {a.label}"})
+    coords["mass"] = xr.Variable(("mass",), np.arange(1, n + 1), attrs={"long_name": "mass number, 1 = bottom"})
+    data["chunk_done"] = xr.Variable(("chunk",), np.zeros(plan.n_chunks, np.int8),
+                                     attrs={"units": "1", "long_name": "1 where the work chunk's results are written"})
+    import importlib.metadata as md
+
+    versions = {p: md.version(p) for p in ("jax", "diffrax", "equinox", "numpy", "scipy", "xarray", "zarr")}
+    ds = xr.Dataset(data, coords=coords, attrs={
+        "title": "hertz_chain sweep", "Conventions": "CF-1.10", "source": f"hertz_chain {__version__}",
+        "history": f"{datetime.datetime.now(datetime.timezone.utc).isoformat()} hertz-chain sweep {source or ''}",
+        "stack_file": text, "stack_file_sha256": _fingerprint(text), "versions": json.dumps(versions),
+        "chunk_rows": plan.chunk_rows, "n_chunks": plan.n_chunks})
+    ds.to_zarr(path, mode="w-", compute=False, consolidated=False,
+               encoding={"chunk_done": {"chunks": (1,), "compressors": None, "fill_value": 0}})
+
+
+def _units(spec: StackSpec, a: AxisSpec) -> str:
+    from .stackfile import _UNITS
+
+    dim = _dimension(spec, a.key, a.index)
+    return {"dimensionless": "1"}.get(dim, _UNITS.get(dim, "1")).replace("^", "").replace("/", " ")
+
+
+def _write_chunk(path: Path, plan: _Plan, c: int, res: dict) -> None:
+    """Write chunk `c`'s results into its region, then its marker (atomically)."""
+    import xarray as xr
+
+    r = plan.region(c)
+    shape = (r.stop - r.start,) + plan.shape[1:]
+    dims = plan.dims
+    data = {}
+    for name in VARIABLES:
+        v = res[name]
+        extra = ("mass",) if name == "velocity_gains" else ()
+        data[name] = (dims + extra, v.reshape(shape + v.shape[1:]))
+    if dims == ("design",):
+        for k, a in enumerate(plan.sweep.axes):
+            data[a.label] = (("design",), res["values"][:, k])
+    region = {dims[0]: r}
+    names = list(data)
+    half = len(names) // 2
+    xr.Dataset({k: data[k] for k in names[:half]}).to_zarr(path, region=region, consolidated=False)
+    _fault("mid-data", c)
+    xr.Dataset({k: data[k] for k in names[half:]}).to_zarr(path, region=region, consolidated=False)
+    _fault("after-data", c)
+    import zarr
+
+    zarr.open_array(str(path / "chunk_done"), mode="r+")[c] = 1
+
+
+def _fault(where: str, c: int) -> None:
+    """Fault injection for the kill tests: `HERTZ_CHAIN_SWEEP_FAULT="after-data:3"` kills this process
+    (SIGKILL) after chunk 3's results are written and before its marker; `"mid-data:3"` halfway through
+    writing them."""
+    want = os.environ.get("HERTZ_CHAIN_SWEEP_FAULT", "")
+    if want == f"{where}:{c}":
+        import signal
+
+        os.kill(os.getpid(), signal.SIGKILL)
+
+
+def _done(path: Path) -> set[int]:
+    """The chunks whose marker is written: the one-byte chunk files of `chunk_done` that hold 1 (Zarr v3's
+    default chunk-key encoding, `chunk_done/c/<i>`; a missing or empty file is not done)."""
+    folder = path / "chunk_done" / "c"
+    if not folder.is_dir():
+        return set()
+    out = set()
+    for entry in os.scandir(folder):
+        if entry.name.isdigit():
+            try:
+                if Path(entry.path).read_bytes() == b"\x01":
+                    out.add(int(entry.name))
+            except OSError:
+                pass
+    return out
+
+
+# ------------------------------------------------------------------------------------------ entry point
+@dataclasses.dataclass(frozen=True)
+class SweepResult:
+    """What `sweep` did: the store, the number of designs and chunks, how many chunks were computed in
+    this run (`computed`) and were already done (`skipped`), the designs per second and the status counts."""
+
+    path: Path
+    designs: int
+    chunks: int
+    computed: int
+    skipped: int
+    seconds: float
+    status_counts: dict
+
+    def to_dict(self) -> dict:
+        return {"output": str(self.path), "designs": self.designs, "chunks": self.chunks, "computed": self.computed,
+                "skipped": self.skipped, "seconds": self.seconds,
+                "designs_per_second": self.designs * self.computed / max(self.chunks, 1) / max(self.seconds, 1e-9),
+                "status_counts": self.status_counts}
+
+
+def check(path: str | Path, output: str | Path) -> tuple[_Plan, str]:
+    """Every check before a sweep runs: the file, the spec, and the output (a new store, or one written
+    by this same sweep). Returns the plan and the file text. Raises `StackFileError` or
+    `errors.OutputPathError` (one line)."""
+    from .errors import OutputPathError
+
+    spec, sw, text = read_sweep_file(path)
+    n = spec.n
+    plan = _plan(spec, sw, n)
+    out = Path(output)
+    if out.suffix != ".zarr":
+        raise OutputPathError("--output", out, "a sweep store is a folder ending in .zarr")
+    if out.exists():
+        if not (out / "chunk_done").is_dir():
+            raise OutputPathError("--output", out, "exists and is not a hertz_chain sweep store; choose a new name")
+        import zarr
+
+        attrs = dict(zarr.open_group(str(out), mode="r").attrs)
+        if attrs.get("stack_file_sha256") != _fingerprint(text):
+            raise OutputPathError("--output", out, "written by a different stack file or sweep spec; resume it "
+                                  "with the same file, or choose a new name")
+    elif not out.parent.is_dir():
+        raise OutputPathError("--output", out, f"the folder {out.parent} does not exist")
+    return plan, text
+
+
+def sweep(path: str | Path, output: str | Path, *, workers: int | None = None, scheduler: str | None = None,
+          progress: bool = False) -> SweepResult:
+    """Run the sweep of the stack file `path` into the Zarr store `output` (module docstring).
+
+    **Arguments:** `workers`: run the chunks on a local Dask cluster of that many worker processes;
+    `scheduler`: the address of an existing Dask scheduler (`tcp://host:port`); neither: in this process,
+    every CPU core a JAX device (`simulate_batch` splits each chunk over them). `progress`: a rich
+    progress bar on stderr.
+
+    **Returns** a `SweepResult`. An existing store of the same sweep is resumed: only chunks without a
+    marker run. **Raises** `StackFileError`/`OutputPathError` before anything runs.
+    """
+    t0 = time.perf_counter()
+    path, output = Path(path), Path(output)
+    plan, text = check(path, output)
+    if not output.exists():
+        _create_store(output, plan, text, str(path))
+    done = _done(output)
+    todo = [c for c in range(plan.n_chunks) if c not in done]
+    counts: dict[int, int] = {}
+    bar = _progress(progress, plan, len(todo))
+
+    def finish(c, res):
+        _write_chunk(output, plan, c, res)
+        for code, k in zip(*np.unique(res["status"], return_counts=True)):
+            counts[int(code)] = counts.get(int(code), 0) + int(k)
+        if bar is not None:
+            bar[0].advance(bar[1], plan.region(c).stop * plan.row - plan.region(c).start * plan.row)
+
+    try:
+        if workers is None and scheduler is None:
+            for c in todo:
+                finish(c, _evaluate(text, str(path), c))
+        else:
+            _run_dask(text, str(path), todo, finish, workers, scheduler)
+    finally:
+        if bar is not None:
+            bar[0].stop()
+    from .status import Status
+
+    return SweepResult(output, plan.size, plan.n_chunks, len(todo), plan.n_chunks - len(todo),
+                       time.perf_counter() - t0, {Status(k).text: v for k, v in sorted(counts.items())})
+
+
+def _progress(enabled: bool, plan: _Plan, chunks: int):
+    if not enabled:
+        return None
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    bar = Progress(TextColumn("sweep"), BarColumn(), MofNCompleteColumn(), TextColumn("designs"), TimeElapsedColumn(),
+                   TextColumn("eta"), TimeRemainingColumn(), console=Console(stderr=True), transient=True)
+    bar.start()
+    task = bar.add_task("sweep", total=plan.size)
+    return bar, task
+
+
+def _run_dask(text, source, todo, finish, workers, scheduler) -> None:
+    from distributed import Client, LocalCluster, as_completed
+
+    if scheduler is not None:
+        client, cluster = Client(scheduler), None
+    else:
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                               env={"HERTZ_CHAIN_CPU_DEVICES": "1"})
+        client = Client(cluster)
+    try:
+        futures = {client.submit(_evaluate, text, source, c, pure=False): c for c in todo}
+        for fut in as_completed(futures):
+            finish(futures[fut], fut.result())
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

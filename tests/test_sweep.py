@@ -1,0 +1,152 @@
+"""Sweeps (`hertz_chain.sweep`, `hertz-chain sweep`): every design against the ordinary path (the stack
+file with the axis values written in, `build` and `simulate` one by one); paper Eq 19 for the rigid gain;
+scipy's own Sobol sampler for sampled designs; a sweep killed with SIGKILL (mid-write and between the
+results and their marker) and run again equals an uninterrupted one; Dask gives the same numbers."""
+
+import copy
+import os
+import signal
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import tomli_w
+import xarray as xr
+from scipy.stats import qmc
+
+import hertz_chain as hc
+from hertz_chain.cli import main
+from hertz_chain.sweep import sweep
+
+BASE = {"drop": {"impact_velocity": "1 m/s"}, "stack": {"masses": [1.0, 0.3, 0.1], "gaps": "1 mm"},
+        "contact": {"law": "tsuji", "stiffness": "1e9 N/m^1.5", "restitution": 0.8}}
+GRID = {"chunk": 2, "axis": [{"key": "stack.gaps", "values": ["0 mm", "0.1 mm", "1 cm"]},
+                             {"key": "contact.stiffness", "index": [2], "space": "log", "start": "1e8 N/m^1.5",
+                              "stop": "1e10 N/m^1.5", "num": 2}]}
+
+
+def _file(tmp_path, sweep_section, name="sweep.toml"):
+    path = tmp_path / name
+    path.write_text(tomli_w.dumps(BASE | {"sweep": sweep_section}), encoding="utf-8")
+    return path
+
+
+def _open(path):
+    return xr.open_zarr(path, consolidated=False).load()
+
+
+def test_grid_sweep_equals_the_designs_run_one_by_one(tmp_path):
+    """Each grid point against `simulate_file` of the stack file with the values written in (the gaps,
+    and the stiffness of interface 2 as a [[contact.interface]] override), under gravity; the rigid gain
+    against paper Eq 19 written out here."""
+    out = tmp_path / "grid.zarr"
+    result = sweep(_file(tmp_path, GRID), out)
+    assert (result.designs, result.chunks, result.computed) == (6, 3, 3)
+    ds = _open(out)
+    assert ds.top_velocity_gain.dims == ("stack.gaps", "contact.stiffness[2]")
+    np.testing.assert_allclose(ds["stack.gaps"], [0.0, 1e-4, 1e-2])
+    np.testing.assert_allclose(ds["contact.stiffness[2]"], [1e8, 1e10])
+    assert ds.top_velocity_gain.attrs["units"] == "1" and ds["stack.gaps"].attrs["units"] == "m"
+    m = np.array([1.0, 0.3, 0.1])
+    eq19 = 1.8 * np.prod(1.8 / (1 + m[1:] / m[:-1])) - 1
+    for i, gap in enumerate([0.0, 1e-4, 1e-2]):
+        for j, k in enumerate([1e8, 1e10]):
+            doc = copy.deepcopy(BASE)
+            doc["stack"]["gaps"] = gap
+            doc["contact"]["interface"] = [{"index": 2, "stiffness": k}]
+            path = tmp_path / f"d{i}{j}.toml"
+            path.write_text(tomli_w.dumps(doc))
+            rep = hc.simulate_file(path)
+            assert int(ds.status[i, j]) == rep.status
+            # to the solves' global error at the file's tolerances (rtol = 1e-10): a vmapped solve of a batch
+            # takes its own steps (tests/test_batch.py)
+            assert float(ds.top_velocity_gain[i, j]) == pytest.approx(rep.top_velocity_gain, rel=1e-8)
+            np.testing.assert_allclose(ds.velocity_gains[i, j], rep.velocity_gains, rtol=1e-8)
+            assert float(ds.rigid_gain[i, j]) == pytest.approx(eq19, rel=1e-12)
+    assert ds.chunk_done.values.tolist() == [1, 1, 1]
+
+
+def test_sobol_designs_are_scipys_and_zip_pairs_values(tmp_path):
+    sob = {"sample": "sobol", "samples": 4, "seed": 7, "chunk": 4,
+           "axis": [{"key": "drop.impact_velocity", "bounds": ["0.5 m/s", "2 m/s"]},
+                    {"key": "stack.masses", "index": 2, "bounds": ["0.2 kg", "0.4 kg"]}]}
+    ds = _open(sweep(_file(tmp_path, sob), tmp_path / "s.zarr").path)
+    U = qmc.Sobol(2, scramble=True, seed=7).random(4)
+    np.testing.assert_allclose(ds["drop.impact_velocity"], 0.5 + 1.5 * U[:, 0], rtol=1e-15)
+    np.testing.assert_allclose(ds["stack.masses[2]"], 0.2 + 0.2 * U[:, 1], rtol=1e-15)
+    assert ds.top_velocity_gain.dims == ("design",) and np.all(ds.status == 0)
+    zipped = {"combine": "zip", "axis": [{"key": "stack.masses", "index": 2, "values": ["0.2 kg", "0.4 kg"]},
+                                         {"key": "stack.gaps", "values": ["0 m", "1 mm"]}]}
+    ds = _open(sweep(_file(tmp_path, zipped, "z.toml"), tmp_path / "z.zarr").path)
+    assert ds.sizes["design"] == 2
+    np.testing.assert_allclose(ds["stack.gaps"], [0.0, 1e-3])
+
+
+def _cli_sweep(path, out, fault=None):
+    env = dict(os.environ)
+    if fault:
+        env["HERTZ_CHAIN_SWEEP_FAULT"] = fault
+    return subprocess.run([sys.executable, "-c", "from hertz_chain.cli import main; main()", "sweep", str(path),
+                           "--output", str(out)], env=env, capture_output=True, text=True, timeout=600)
+
+
+def test_a_sweep_killed_mid_write_and_before_its_marker_resumes_to_the_same_store(tmp_path):
+    path = _file(tmp_path, GRID)
+    ref = tmp_path / "ref.zarr"
+    sweep(path, ref)
+    out = tmp_path / "killed.zarr"
+    for fault in ("mid-data:1", "after-data:2"):
+        run = _cli_sweep(path, out, fault)
+        assert run.returncode == -signal.SIGKILL, run.stderr
+    run = _cli_sweep(path, out)
+    assert run.returncode == 0, run.stderr
+    assert "1 chunks computed, 2 already done" in run.stdout  # chunk 2 was recomputed, never 0 or 1 again
+    a, b = _open(ref), _open(out)
+    for name in a.data_vars:
+        np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+
+
+def test_dask_local_cluster_gives_the_same_store(tmp_path):
+    path = _file(tmp_path, GRID)
+    a = _open(sweep(path, tmp_path / "local.zarr").path)
+    b = _open(sweep(path, tmp_path / "dask.zarr", workers=2).path)
+    for name in a.data_vars:
+        np.testing.assert_allclose(a[name].values, b[name].values, rtol=1e-12, err_msg=name)
+
+
+@pytest.mark.parametrize("section, words", [
+    ({"axis": [{"key": "stack.gap", "values": [0]}]}, ["stack.gap", "did you mean 'stack.gaps'"]),
+    ({"axis": [{"key": "stack.masses", "index": 5, "values": [1]}]}, ["index", "5", "out of range"]),
+    ({"combine": "zip", "axis": [{"key": "stack.gaps", "values": [0, 1e-3]},
+                                 {"key": "drop.impact_velocity", "values": ["1 m/s"]}]}, ["same number of values"]),
+    ({"sample": "sobol", "axis": [{"key": "stack.gaps", "bounds": [0, 1e-3]}]}, ["sweep.samples", "missing"]),
+    ({"axis": [{"key": "contact.stiffness", "space": "log", "start": "1 kg", "stop": "2 kg", "num": 3}]},
+     ["start", "stiffness"]),
+    ({"axis": [{"key": "stack.gaps", "space": "cubic", "start": 0, "stop": 1e-3, "num": 3}]}, ["space", "linear, log"]),
+    ({}, ["sweep.axis", "missing"]),
+])
+def test_bad_sweep_sections_give_one_line_and_exit_2(tmp_path, capsys, section, words):
+    path = _file(tmp_path, section)
+    with pytest.raises(SystemExit) as exc:
+        main(["sweep", str(path), "--output", str(tmp_path / "o.zarr")])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and err.count("\n") == 1 and err.startswith("hertz-chain: error: ")
+    for w in words:
+        assert w in err, (w, err)
+    assert not (tmp_path / "o.zarr").exists()
+
+
+def test_a_store_of_another_sweep_or_a_foreign_folder_is_refused(tmp_path, capsys):
+    path = _file(tmp_path, GRID)
+    out = tmp_path / "o.zarr"
+    sweep(path, out)
+    other = _file(tmp_path, GRID | {"chunk": 3}, "other.toml")
+    foreign = tmp_path / "mine.zarr"
+    foreign.mkdir()
+    (foreign / "notes.txt").write_text("mine")
+    for target, word in ((out, "different stack file"), (foreign, "not a hertz_chain sweep store")):
+        with pytest.raises(SystemExit) as exc:
+            main(["sweep", str(other), "--output", str(target)])
+        assert exc.value.code == 2 and word in capsys.readouterr().err
+    assert (foreign / "notes.txt").read_text() == "mine"
