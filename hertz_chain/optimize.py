@@ -582,6 +582,7 @@ class _Run:
     message: str
     success: bool
     history: list
+    evaluations: int = 0
 
 
 def _local(space: _Space, ev: _Evaluator, problem: OptimizeSpec, u0: np.ndarray) -> _Run:
@@ -605,20 +606,22 @@ def _local(space: _Space, ev: _Evaluator, problem: OptimizeSpec, u0: np.ndarray)
                        options={"maxiter": problem.max_iterations, "initial_tr_radius": 0.1,
                                 "final_tr_radius": 1e-8})
     else:
-        def record(*args):  # the objective at each iterate (the last evaluation is the accepted point)
-            u = args[0].x if hasattr(args[0], "x") else args[0]
-            last = getattr(ev, "last", None)
-            history.append(last[1] if last is not None and np.array_equal(last[0], u) else ev.value_and_grad(u)[0])
+        def record(intermediate_result):  # the objective at each iterate, as scipy reports it (no new solve)
+            history.append(float(intermediate_result.fun))
 
         if cons:
             res = minimize(ev.value_and_grad, u0, jac=True, method="SLSQP", bounds=bounds, constraints=cons,
                            callback=record, options={"maxiter": problem.max_iterations, "ftol": 1e-14})
         else:
+            # stop at the gradient's own accuracy: ~1e-9 relative by reverse mode, ~1e-5 by the batched
+            # central differences (their noise, `_Evaluator.FD_STEP`); beyond it a line search only fails,
+            # and each failure costs up to `maxls` evaluations
+            gtol = 1e-9 if ev.gradient == "reverse mode" else 1e-6
             res = minimize(ev.value_and_grad, u0, jac=True, method="L-BFGS-B", bounds=bounds, callback=record,
-                           options={"maxiter": problem.max_iterations, "ftol": 1e-15, "gtol": 1e-10,
-                                    "maxls": 40})
+                           options={"maxiter": problem.max_iterations, "ftol": 1e-13, "gtol": gtol,
+                                    "maxls": 20})
     return _Run(np.clip(res.x, 0, 1), float(res.fun), int(getattr(res, "nit", 0)), str(res.message),
-                bool(res.success), history)
+                bool(res.success), history, int(getattr(res, "nfev", 0)))
 
 
 # ------------------------------------------------------------------------------------------ result
@@ -800,14 +803,14 @@ def optimize(path: str | Path) -> OptimizeResult:
     spec, problem, spaces = prepare(path)
     ns = [sp.n for sp in spaces]
     best = None
-    evaluations = 0
+    evaluators = []
     for space in spaces:
         ev = _Evaluator(space, problem)
         u_file = space.to_u(space.dm.values())
         screened = _screen(space, ev, problem)
         starts = [u_file] + list(screened[: max(problem.starts - 1, 0)])
         runs = [_local(space, ev, problem, u) for u in starts]
-        evaluations += ev.count
+        evaluators.append(ev)
         runs.sort(key=lambda r: r.value)
         top = runs[0]
         if best is None or top.value < best[1][0].value:
@@ -853,8 +856,8 @@ def optimize(path: str | Path) -> OptimizeResult:
     convergence = {
         "method": ("COBYQA" if problem.needs_pulse else ("SLSQP" if problem.total_mass else "L-BFGS-B")),
         "gradient": None if problem.needs_pulse else ev.gradient,
-        "starts": [{"value": r.value, "iterations": r.iterations, "message": r.message, "success": r.success}
-                   for r in runs],
+        "starts": [{"value": r.value, "iterations": r.iterations, "evaluations": r.evaluations,
+                    "message": r.message, "success": r.success} for r in runs],
         "starts_agree": f"{agree} of {len(runs)} within 1e-6 (relative, at least 1e-8 absolute) of the best",
         "iterations": top.iterations,
         "projected_gradient_norm": pg,
@@ -867,7 +870,7 @@ def optimize(path: str | Path) -> OptimizeResult:
     return OptimizeResult(
         status=status, objective=problem.objective, objective_value=float(value), n=space.n,
         variables={s.label: float(v) for s, v in zip(space.slots, x)}, report=report, start=start,
-        rigid_designs=rigid, convergence=convergence, evaluations=evaluations + ev.count,
+        rigid_designs=rigid, convergence=convergence, evaluations=sum(e.count for e in evaluators),
         seconds=time.perf_counter() - t0, doc=doc_best, source=str(path),
         gaps=tuple(float(g) for g in np.asarray(space.dm.fields(x)["stack.gaps"])),
     )
