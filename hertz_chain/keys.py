@@ -18,11 +18,12 @@ command line reads it while checking a file, before JAX is imported.
 from __future__ import annotations
 
 import difflib
+import math
 from dataclasses import dataclass
 
 from .errors import StackFileError
 
-__all__ = ["KeyRow", "KEYS", "Slot", "resolve"]
+__all__ = ["KeyRow", "KEYS", "Slot", "resolve", "read_entry", "read_bounds", "dimension"]
 
 
 @dataclass(frozen=True)
@@ -118,3 +119,41 @@ def resolve(key: object, index: object, *, n: int, ground: bool, where: str = "k
             raise StackFileError(f"{where}.index: {i} is given twice")
         seen.append(i)
     return tuple(Slot(key, i) for i in seen)
+
+
+def read_entry(item: object, where: str, allowed: tuple[str, ...], example: str) -> dict:
+    """Check one `[[optimize.vary]]` / `[[sweep.axis]]` table: a table, only `allowed` keys, a `key`.
+    Raises `StackFileError` (one line)."""
+    if not isinstance(item, dict):
+        raise StackFileError(f"{where}: expected a table, got {item!r}")
+    for k in item:
+        if k not in allowed:
+            raise StackFileError(f"{where}.{k}: unknown key; allowed: {', '.join(allowed)}")
+    if "key" not in item:
+        raise StackFileError(f"{where}.key: missing; the stack-file key, e.g. '{example}'")
+    return item
+
+
+def dimension(spec, key: str, index: object) -> str:
+    """The `stackfile` dimension of `key` in the file `spec`: a stiffness is N/m^1.5 or N/m by the law
+    of the (first) interface named."""
+    from .registry import LAWS
+
+    dim = KEYS[key].dimension
+    if dim != "stiffness":
+        return dim
+    idx = index if isinstance(index, list) else [index]
+    j = next((i for i in idx if isinstance(i, int) and not isinstance(i, bool)), 1)
+    return LAWS[spec.contact_for(j).law].stiffness
+
+
+def read_bounds(raw: object, dim: str, where: str) -> tuple[float, float]:
+    """`[lower, upper]` with units -> SI floats, lower < upper. Raises `StackFileError`."""
+    from .stackfile import parse_quantity
+
+    if not isinstance(raw, list) or len(raw) != 2:
+        raise StackFileError(f"{where}: {raw!r} is invalid: two values [lower, upper] with units")
+    lo, hi = (parse_quantity(b, dim, where) for b in raw)
+    if not (math.isfinite(lo) and math.isfinite(hi)) or not lo < hi:
+        raise StackFileError(f"{where}: {raw!r} is invalid: the lower bound must be below the upper")
+    return lo, hi

@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from .errors import StackFileError
-from .keys import KEYS, Slot, resolve
+from .keys import KEYS, Slot, dimension, read_bounds, read_entry, resolve
 from .stackfile import StackSpec, parse_quantity, parse_stack
 from .status import Status
 
@@ -145,12 +145,6 @@ def _positive(raw, key, dim) -> float:
     if not (math.isfinite(value) and value > 0):
         raise _err(key, f"{raw!r} is invalid: must be > 0")
     return value
-
-
-def _stiffness_dimension(spec: StackSpec, j: int) -> str:
-    from .registry import LAWS
-
-    return LAWS[spec.contact_for(j).law].stiffness
 
 
 def _parse_srs(raw: dict) -> dict:
@@ -260,28 +254,12 @@ def parse_optimize(raw: Any, spec: StackSpec) -> OptimizeSpec:
     entries = []
     for i, item in enumerate(vary):
         where = f"optimize.vary[{i}]"
-        if not isinstance(item, dict):
-            raise _err(where, f"expected a table, got {item!r}")
-        for k in item:
-            if k not in _VARY_KEYS:
-                raise _err(f"{where}.{k}", f"unknown key; allowed: {', '.join(_VARY_KEYS)}")
-        if "key" not in item:
-            raise _err(f"{where}.key", "missing; the stack-file key to vary, e.g. 'stack.masses'")
+        read_entry(item, where, _VARY_KEYS, "stack.masses")
         key = item["key"]
         resolve(key, None, n=3, ground=True, where=f"{where}.key")  # known key (indices checked per n)
         row = KEYS[key]
-        bounds = item.get("bounds")
-        if not isinstance(bounds, list) or len(bounds) != 2:
-            raise _err(f"{where}.bounds", f"{bounds!r} is invalid: two values [lower, upper] with units")
-        dim = row.dimension
-        if dim == "stiffness":
-            idx = item.get("index")
-            dims = {_stiffness_dimension(spec, j) for j in (idx if isinstance(idx, list) else [idx])
-                    if isinstance(j, int) and not isinstance(j, bool)} or {"hertz_stiffness"}
-            dim = dims.pop() if len(dims) == 1 else "hertz_stiffness"
-        lo, hi = (parse_quantity(b, dim, f"{where}.bounds") for b in bounds)
-        if not (math.isfinite(lo) and math.isfinite(hi)) or not lo < hi:
-            raise _err(f"{where}.bounds", f"{bounds!r} is invalid: the lower bound must be below the upper")
+        lo, hi = read_bounds(item.get("bounds"), dimension(spec, key, item.get("index")), f"{where}.bounds")
+        bounds = item["bounds"]
         if (row.positive and lo <= 0) or lo < 0:
             raise _err(f"{where}.bounds", f"{bounds!r} is invalid: {key} must be {'> 0' if row.positive else '>= 0'}")
         if row.upper is not None and hi > row.upper:
@@ -586,7 +564,7 @@ class _Run:
 
 
 def _local(space: _Space, ev: _Evaluator, problem: OptimizeSpec, u0: np.ndarray) -> _Run:
-    from scipy.optimize import Bounds, LinearConstraint, NonlinearConstraint, minimize
+    from scipy.optimize import Bounds, NonlinearConstraint, minimize
 
     d = len(u0)
     bounds = Bounds(np.zeros(d), np.ones(d))

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import itertools
 import json
 import math
 import os
@@ -39,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from .errors import StackFileError
-from .keys import KEYS, Slot, resolve
+from .keys import Slot, dimension, read_bounds, read_entry, resolve
 from .stackfile import StackSpec, load_stack_file, parse_quantity
 
 __all__ = ["SweepSpec", "AxisSpec", "SweepResult", "read_sweep_file", "check", "sweep", "COMBINE", "SAMPLES"]
@@ -100,30 +99,13 @@ def _err(key: str, problem: str) -> StackFileError:
     return StackFileError(f"{key}: {problem}")
 
 
-def _dimension(spec: StackSpec, key: str, index) -> str:
-    from .registry import LAWS
-
-    dim = KEYS[key].dimension
-    if dim != "stiffness":
-        return dim
-    idx = index if isinstance(index, list) else [index]
-    j = next((i for i in idx if isinstance(i, int) and not isinstance(i, bool)), 1)
-    return LAWS[spec.contact_for(j).law].stiffness
-
-
 def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisSpec:
     where = f"sweep.axis[{i}]"
-    if not isinstance(item, dict):
-        raise _err(where, f"expected a table, got {item!r}")
-    for k in item:
-        if k not in _AXIS_KEYS:
-            raise _err(f"{where}.{k}", f"unknown key; allowed: {', '.join(_AXIS_KEYS)}")
-    if "key" not in item:
-        raise _err(f"{where}.key", "missing; the stack-file key to sweep, e.g. 'stack.gaps'")
+    read_entry(item, where, _AXIS_KEYS, "stack.gaps")
     key, index = item["key"], item.get("index")
     n = spec.n or 3
     resolve(key, index, n=n, ground=spec.has_ground, where=where)  # the key and its indices
-    dim = _dimension(spec, key, index)
+    dim = dimension(spec, key, index)
     q = lambda raw, k: parse_quantity(raw, dim, f"{where}.{k}")  # noqa: E731
     values = bounds = distribution = std = None
     if sample is None:
@@ -149,12 +131,7 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
                 raise _err(f"{where}.start", "a log axis needs start and stop > 0")
             values = tuple((np.geomspace(a, b, num) if space == "log" else np.linspace(a, b, num)).tolist())
     elif sample in ("sobol", "lhs"):
-        raw = item.get("bounds")
-        if not isinstance(raw, list) or len(raw) != 2:
-            raise _err(f"{where}.bounds", f"{raw!r} is invalid: [lower, upper] with units (sample = '{sample}')")
-        bounds = (q(raw[0], "bounds"), q(raw[1], "bounds"))
-        if not bounds[0] < bounds[1]:
-            raise _err(f"{where}.bounds", f"{raw!r} is invalid: the lower bound must be below the upper")
+        bounds = read_bounds(item.get("bounds"), dim, f"{where}.bounds")
     else:  # montecarlo
         distribution = item.get("distribution", "normal")
         if distribution not in DISTRIBUTIONS:
@@ -166,12 +143,7 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
             if not std > 0:
                 raise _err(f"{where}.std", f"{item['std']!r} is invalid: must be > 0")
         else:
-            raw = item.get("bounds")
-            if not isinstance(raw, list) or len(raw) != 2:
-                raise _err(f"{where}.bounds", f"{raw!r} is invalid: [lower, upper] with units")
-            bounds = (q(raw[0], "bounds"), q(raw[1], "bounds"))
-            if not bounds[0] < bounds[1]:
-                raise _err(f"{where}.bounds", f"{raw!r} is invalid: the lower bound must be below the upper")
+            bounds = read_bounds(item.get("bounds"), dim, f"{where}.bounds")
     return AxisSpec(key, index, values, bounds, distribution, std, where)
 
 
@@ -442,7 +414,7 @@ def _create_store(path: Path, plan: _Plan, text: str, source: str | None) -> Non
 def _units(spec: StackSpec, a: AxisSpec) -> str:
     from .stackfile import _UNITS
 
-    dim = _dimension(spec, a.key, a.index)
+    dim = dimension(spec, a.key, a.index)
     return {"dimensionless": "1"}.get(dim, _UNITS.get(dim, "1")).replace("^", "").replace("/", " ")
 
 
