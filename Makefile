@@ -27,6 +27,7 @@ docs: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py --output benchmarks/results.md --json benchmarks/results.json
 	$(BIN)/python benchmarks/optimize.py --output benchmarks/optimize.md
+	$(BIN)/python benchmarks/sweep.py --output benchmarks/sweep.md
 
 # A one-minute smoke run (n = 2, one regime) into out/; CI runs the same through tests/test_benchmarks_smoke.py.
 bench-smoke: $(STAMP)

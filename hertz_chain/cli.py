@@ -195,7 +195,7 @@ def simulate(
 
 @app.command()
 def optimize(
-    stack_file: Path = typer.Argument(..., help="Stack file with an [optimize] section (docs/optimize.md)."),
+    stack_file: Path = typer.Argument(..., help="Stack file with an optimize section (docs/optimize.md)."),
     as_json: bool = typer.Option(False, "--json", help="Print the result as JSON."),
     write: Optional[Path] = typer.Option(None, "--write", "-w", help="Write the optimum as a stack file (.toml)."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Write the convergence and the pulses (PNG)."),
@@ -243,14 +243,14 @@ def optimize(
 
 @app.command()
 def sweep(
-    stack_file: Path = typer.Argument(..., help="Stack file with [sweep] and [[sweep.axis]] (docs/sweeps.md)."),
+    stack_file: Path = typer.Argument(..., help="Stack file with a sweep section and its axes (docs/sweeps.md)."),
     output: Path = typer.Option(..., "--output", "-o", help="The Zarr store to write (a folder ending in .zarr)."),
     workers: Optional[int] = typer.Option(None, "--workers", help="Run on a local Dask cluster of N worker processes."),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Run on an existing Dask cluster (tcp://host:port)."),
     resume: bool = typer.Option(False, "--resume", help="Continue a killed sweep (the same command does it too)."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
 ) -> None:
-    """Sweep a design space: every design of the [[sweep.axis]] grid or samples, into a Zarr store that survives a kill."""
+    """Sweep a design space (the file's sweep axes: a grid or samples) into a Zarr store that survives a kill."""
     from .sweep import check
 
     try:
