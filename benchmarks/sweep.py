@@ -50,6 +50,7 @@ def main(argv=None) -> int:
     ap.add_argument("--output", default=str(ROOT / "benchmarks" / "sweep.md"))
     ap.add_argument("--designs", type=int, default=20_000)
     ap.add_argument("--chunk", type=int, default=2048)
+    ap.add_argument("--workers", default="1,2,4", help="local Dask worker counts to time ('' for none)")
     args = ap.parse_args(argv)
 
     import jax
@@ -62,21 +63,26 @@ def main(argv=None) -> int:
     path.write_text(tomli_w.dumps(_doc(args.designs, args.chunk)))
     text = path.read_text()
     plan, dm, widths = _design_map(text, str(path))
+    designs = jax.jit(jax.vmap(dm))  # as `sweep` does
     n = plan.size
 
     # warm both paths on one chunk
     sweep(path, tmp / "warm.zarr")
     shutil.rmtree(tmp / "warm.zarr")
 
-    # 1. bare simulate_batch on the same chunks
-    t = time.perf_counter()
-    for c in range(plan.n_chunks):
+    # 1. bare simulate_batch on the same chunks, with the same options, warmed on the first chunk
+    def bare_chunk(c):
         X = np.repeat(plan.values(c), widths, axis=1)
         size = plan.chunk_rows * plan.row
         if len(X) < size:
             X = np.vstack([X, np.repeat(X[-1:], size - len(X), axis=0)])
-        stacks, states = jax.vmap(dm)(X)
-        simulate_batch(stacks, states, save_steps=False)
+        stacks, states = designs(X)
+        simulate_batch(stacks, states, save_steps=False, max_steps=16_384)
+
+    bare_chunk(0)
+    t = time.perf_counter()
+    for c in range(plan.n_chunks):
+        bare_chunk(c)
     bare = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -85,7 +91,7 @@ def main(argv=None) -> int:
     rss_gb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
 
     rows = []
-    for workers in (1, 2, 4):
+    for workers in [int(w) for w in args.workers.split(",") if w]:
         out = tmp / f"w{workers}.zarr"
         t = time.perf_counter()
         sweep(path, out, workers=workers)

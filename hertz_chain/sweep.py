@@ -299,6 +299,8 @@ def _design_map(text: str, source: str | None):
     """The design map and slot layout of a sweep file, built once per process (workers reuse it)."""
     import tomllib
 
+    import jax
+
     from ._design import DesignMap, with_masses
     from .build import design_masses
     from .stackfile import parse_stack
@@ -319,6 +321,7 @@ def _design_map(text: str, source: str | None):
             k += len(axis)
         plan.base = base[pos]
         _CACHE[key] = (plan, dm, [len(a) for a in plan.slots])
+        _CACHE[key + "jit"] = (jax.jit(jax.vmap(dm)), jax.jit(jax.vmap(dm.fields)))
     return _CACHE[key]
 
 
@@ -330,17 +333,18 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
     from .simulate import simulate_batch
 
     plan, dm, widths = _design_map(text, source)
+    designs, fields_of = _CACHE[hashlib.sha256(text.encode()).hexdigest() + "jit"]  # compiled once per process
     V = plan.values(c)
     X = np.repeat(V, widths, axis=1)  # an axis sets every slot it names to its value
     B = X.shape[0]
     size = plan.chunk_rows * plan.row  # pad to the full chunk: one compiled shape for every chunk
     if B < size:
         X = np.vstack([X, np.repeat(X[-1:], size - B, axis=0)])
-    stacks, states = jax.vmap(dm)(X)
+    stacks, states = designs(X)
     opts = {k: v for k, v in dm.built.simulate_options.items() if k in ("solver", "tolerances", "t_max", "until")}
     sol = simulate_batch(stacks, states, save_steps=False, max_steps=dm.built.simulate_options.get("max_steps", 16_384),
                          **opts)
-    fields = jax.vmap(dm.fields)(X)
+    fields = fields_of(X)
     speed = np.asarray(fields["drop.impact_velocity"]) if not dm.chain else \
         np.full(len(X), dm.drop_speed(None))
     gains = sol.launch_velocities / speed[:, None]

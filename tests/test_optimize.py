@@ -350,3 +350,19 @@ def test_srs_objective_fits_the_half_sine_srs_of_condition_b(tmp_path, capsys):
     keep = np.isfinite(st.t)
     got = _sdof_srs(st.t[keep], (st.accelerations[keep, -1] + g) / G0, freqs)
     assert np.max(np.abs(20 * np.log10(got / target))) < 3.0
+
+
+def test_a_search_cut_short_exits_3_and_still_reports_its_best_point(tmp_path, capsys):
+    doc = {"drop": {"impact_velocity": "2 m/s"}, "stack": {"masses": ["1 kg", "100 g"], "gaps": 0},
+           "contact": {"law": "tsuji", "stiffness": "1e8 N/m^1.5", "restitution": 0.8,
+                       "ground": {"stiffness": "1e10 N/m^1.5"}},
+           "optimize": {"objective": "pulse", "target_peak_g": 1500, "target_duration": "0.5 ms", "starts": 1,
+                        "screen": 0, "max_iterations": 2,
+                        "vary": [{"key": "drop.impact_velocity", "bounds": ["0.5 m/s", "5 m/s"]}]}}
+    out = tmp_path / "best.toml"
+    code, text, err = _cli(["optimize", str(_write(tmp_path, doc)), "--json", "--write", str(out)], capsys)
+    assert code == 3
+    res = json.loads(text)
+    assert res["status"] == "not converged" and res["convergence"]["why"]
+    assert err.count("\n") == 1 and err.startswith("hertz-chain: optimize not converged: ")
+    assert out.exists() and res["masses"] == [1.0, 0.1]
