@@ -9,6 +9,7 @@ Commands:
   compliant contacts (`hertz_chain.optimize`; exit 0 converged, 3 not converged, 5 failed).
 - `hertz-chain sweep STACK.toml --output OUT.zarr [--workers N | --scheduler ADDR] [--resume] [--json]` —
   a design space into a Zarr store that survives a kill (`hertz_chain.sweep`).
+- `hertz-chain plot OUT.zarr --x KEY [--y KEY] [--var NAME] --output F.png` — a line or a map from a sweep.
 - `hertz-chain demo` — the paper's optimal six-mass MVG stack, gapped and touching.
 
 Every user error (bad file, bad parameter, bad path, unknown command or flag, missing argument) prints
@@ -283,6 +284,30 @@ def sweep(
         counts = ", ".join(f"{k} {v}" for k, v in result.status_counts.items())
         typer.echo(f"{result.path}: {result.designs} designs; {result.computed} chunks computed, {result.skipped} "
                    f"already done{rate}" + (f"; this run: {counts}" if counts else ""))
+
+
+@app.command("plot")
+def plot_command(
+    store: Path = typer.Argument(..., help="A sweep store (OUT.zarr) written by hertz-chain sweep."),
+    x: str = typer.Option(..., "--x", help="The axis (or sampled key) along x, e.g. stack.gaps."),
+    y: Optional[str] = typer.Option(None, "--y", help="A second axis: draw a map instead of lines."),
+    var: str = typer.Option("top_velocity_gain", "--var", help="The variable to draw."),
+    output: Path = typer.Option(..., "--output", "-o", help="The figure to write (.png)."),
+    force: bool = typer.Option(False, "--force", help="Overwrite an existing figure."),
+) -> None:
+    """Draw a line or a map from a sweep store."""
+    from . import _paths
+
+    try:
+        if not (store / "chunk_done").is_dir():
+            _fail(f"{store}: not a hertz_chain sweep store (written by hertz-chain sweep)")
+        _paths.check_output_path(output, "--output", PLOT_SUFFIXES, force)
+        from . import plot as plotting
+
+        _paths.write_atomically(output, lambda tmp: plotting.plot_sweep(store, tmp, x=x, y=y, var=var), force,
+                                "--output")
+    except HertzChainError as exc:
+        _fail(str(exc))
 
 
 @app.command()

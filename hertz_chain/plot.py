@@ -9,7 +9,7 @@ import numpy as np
 from .analysis import Report
 from .pulse import G0
 
-__all__ = ["report_figure", "plot_report", "plot_optimize"]
+__all__ = ["report_figure", "plot_report", "plot_optimize", "plot_sweep"]
 
 
 def report_figure(report: Report):
@@ -101,3 +101,87 @@ def plot_optimize(result, path: str | Path) -> None:
     ax1.legend()
     fig.savefig(path, dpi=120, format="png")
     plt.close(fig)
+
+
+def plot_sweep(store: str | Path, path: str | Path, *, x: str, y: str | None = None,
+               var: str = "top_velocity_gain") -> None:
+    """A line (`x` only) or a map (`x` and `y`) of the variable `var` of a sweep store, as a PNG.
+
+    Grid sweeps: `x` and `y` are axis dimensions; any other axis is taken at its first value (said in the
+    title), and a line plot draws one line per value of a single remaining dimension. Sampled or zipped
+    sweeps: `x` and `y` are sampled variables, drawn as a scatter (coloured by `var` with `y`).
+    Raises `ParameterError` naming the flag for an unknown name."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+    import xarray as xr
+
+    from .errors import ParameterError
+
+    ds = xr.open_zarr(store, consolidated=False)
+    names = [k for k in ds.data_vars if k != "chunk_done"]
+    if var not in ds.data_vars or var == "chunk_done":
+        raise ParameterError("--var", var, f"one of {', '.join(names)}")
+    allowed = [d for d in ds.dims if d not in ("mass", "chunk")] if "design" not in ds.dims else \
+        [k for k in names if ds[k].dims == ("design",) and k not in VARIABLE_NAMES]
+    for flag, name in (("--x", x), ("--y", y)):
+        if name is not None and name not in allowed:
+            raise ParameterError(flag, name, f"one of {', '.join(allowed)}")
+    da = ds[var].where(ds["status"] <= 1) if var != "status" else ds[var]
+    fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
+    title = f"{var} ({da.attrs.get('long_name', '')})"
+
+    def scale(axis_name, setter):  # log for values spanning decades (symlog when they start at zero)
+        v = np.asarray(ds[axis_name], dtype=float)
+        pos = v[v > 0]
+        if pos.size and pos.max() / pos.min() >= 30:
+            if np.all(v > 0):
+                setter("log")
+            elif np.all(v >= 0):
+                setter("symlog", linthresh=pos.min())
+
+    if "design" in ds.dims:
+        if y is None:
+            ax.plot(ds[x], da, ".", ms=3)
+            ax.set(xlabel=_label(ds, x), ylabel=var)
+        else:
+            sc = ax.scatter(ds[x], ds[y], c=da, s=6)
+            fig.colorbar(sc, ax=ax, label=var)
+            ax.set(xlabel=_label(ds, x), ylabel=_label(ds, y))
+            scale(y, ax.set_yscale)
+        scale(x, ax.set_xscale)
+    else:
+        rest = [d for d in da.dims if d not in (x, y)]
+        fixed = [d for d in rest if not (y is None and len(rest) == 1)]
+        if fixed:
+            da = da.isel({d: 0 for d in fixed})
+            title += "; at " + ", ".join(f"{d} = {float(ds[d][0]):.4g}" for d in fixed if d in ds.coords)
+        if y is None:
+            lines = [d for d in da.dims if d != x]
+            if lines:
+                for k in range(da.sizes[lines[0]]):
+                    ax.plot(ds[x], da.isel({lines[0]: k}), marker="o", ms=3,
+                            label=f"{lines[0]} = {float(ds[lines[0]][k]):.4g}")
+                ax.legend(fontsize="small")
+            else:
+                ax.plot(ds[x], da, marker="o", ms=3)
+            ax.set(xlabel=_label(ds, x), ylabel=var)
+        else:
+            mesh = ax.pcolormesh(ds[x], ds[y], da.transpose(y, x), shading="nearest")
+            fig.colorbar(mesh, ax=ax, label=var)
+            ax.set(xlabel=_label(ds, x), ylabel=_label(ds, y))
+            scale(y, ax.set_yscale)
+        scale(x, ax.set_xscale)
+    ax.set_title(title, fontsize="small")
+    fig.savefig(path, dpi=120, format="png")
+    plt.close(fig)
+
+
+VARIABLE_NAMES = ("status", "top_velocity_gain", "velocity_gains", "rigid_gain", "rigid_deficit", "energy_error",
+                  "num_steps", "t_final")
+
+
+def _label(ds, name: str) -> str:
+    units = ds[name].attrs.get("units", "")
+    return f"{name} ({units})" if units and units != "1" else name

@@ -415,11 +415,13 @@ def _create_store(path: Path, plan: _Plan, text: str, source: str | None) -> Non
                encoding={"chunk_done": {"chunks": (1,), "compressors": None, "fill_value": 0}})
 
 
-def _units(spec: StackSpec, a: AxisSpec) -> str:
-    from .stackfile import _UNITS
+#: CF / UDUNITS spellings of the stack files' SI units
+_CF_UNITS = {"dimensionless": "1", "mass": "kg", "length": "m", "time": "s", "velocity": "m s-1",
+             "acceleration": "m s-2", "hertz_stiffness": "N m-1.5", "linear_stiffness": "N m-1", "force": "N"}
 
-    dim = dimension(spec, a.key, a.index)
-    return {"dimensionless": "1"}.get(dim, _UNITS.get(dim, "1")).replace("^", "").replace("/", " ")
+
+def _units(spec: StackSpec, a: AxisSpec) -> str:
+    return _CF_UNITS.get(dimension(spec, a.key, a.index), "1")
 
 
 def _write_chunk(path: Path, plan: _Plan, c: int, res: dict) -> None:

@@ -153,3 +153,13 @@ def test_a_store_of_another_sweep_or_a_foreign_folder_is_refused(tmp_path, capsy
             main(["sweep", str(other), "--output", str(target)])
         assert exc.value.code == 2 and word in capsys.readouterr().err
     assert (foreign / "notes.txt").read_text() == "mine"
+    # the store draws: a map over both axes, and a one-line refusal of an unknown axis or variable
+    png = tmp_path / "map.png"
+    with pytest.raises(SystemExit) as exc:
+        main(["plot", str(out), "--x", "contact.stiffness[2]", "--y", "stack.gaps", "--output", str(png)])
+    assert exc.value.code in (0, None) and png.read_bytes()[:4] == b"\x89PNG"
+    for flags, word in ((["--x", "stack.gap"], "--x"), (["--x", "stack.gaps", "--var", "gain"], "--var")):
+        with pytest.raises(SystemExit) as exc:
+            main(["plot", str(out), *flags, "--output", str(tmp_path / "x.png")])
+        err = capsys.readouterr().err
+        assert exc.value.code == 2 and err.startswith(f"hertz-chain: error: {word}") and err.count("\n") == 1
