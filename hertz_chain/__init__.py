@@ -94,6 +94,8 @@ _EXPORTS = {
     "resting": "stack",
     "stack_designs": "stack",
     "simulate_file": "workflow",
+    "SweepResult": "sweep",
+    "sweep": "sweep",
     "StackSpec": "stackfile",
     "load_stack_file": "stackfile",
     "parse_stack": "stackfile",
@@ -117,7 +119,7 @@ def __dir__():
 
 
 class _Package(types.ModuleType):
-    """Keeps the functions `simulate`, `srs`, `build` and `optimize` from being shadowed by their submodules of
+    """Keeps the functions `simulate`, `srs`, `build`, `optimize` and `sweep` from being shadowed by their submodules of
     the same name when the import system binds a loaded submodule onto the package (as the eager
     `from .simulate import simulate` of a classic `__init__` would)."""
 
@@ -195,5 +197,6 @@ if TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
     from .status import Status
     from .stack import Stack, State, at_impact, dropped, resting, stack_designs
     from .stackfile import StackSpec, load_stack_file, parse_stack
+    from .sweep import SweepResult, sweep
     from .workflow import simulate_file
 

@@ -14,9 +14,12 @@ def test_every_public_name_resolves():
 def test_functions_are_not_shadowed_by_their_submodules():
     import hertz_chain.build  # noqa: F401  (binds the submodule onto the package)
     import hertz_chain.simulate  # noqa: F401
+    import hertz_chain.optimize  # noqa: F401
     import hertz_chain.srs  # noqa: F401
+    import hertz_chain.sweep  # noqa: F401
 
     assert callable(hc.simulate) and callable(hc.srs) and callable(hc.build)
+    assert callable(hc.optimize) and callable(hc.sweep)
 
 
 def test_import_and_cli_help_do_not_import_jax():
