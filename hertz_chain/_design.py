@@ -93,7 +93,7 @@ class DesignMap:
     restitution on an elastic law or one given by its raw damping, a drop key on a chain without ground).
     """
 
-    def __init__(self, spec: StackSpec, slots: tuple[Slot, ...]):
+    def __init__(self, spec: StackSpec, slots: tuple[Slot, ...], section: str = "optimize.vary"):
         built = build(spec)
         self.spec, self.slots, self.built = spec, tuple(slots), built
         m = np.asarray(built.masses, dtype=float)
@@ -115,6 +115,7 @@ class DesignMap:
             "drop.impact_velocity": np.asarray(math.nan if v is None else v),
             "drop.height": np.asarray(math.nan if v is None or self.gravity <= 0 else v * v / (2 * self.gravity)),
         }
+        self.section = section
         for s in self.slots:
             self._check(s)
         self._d = {j: _LAW_CLASSES[cs.law].dimensionless_damping(cs.restitution, chi_map=cs.chi_map or "exact",
@@ -122,7 +123,7 @@ class DesignMap:
                    for j, cs in self.contacts.items() if not LAWS[cs.law].elastic and cs.restitution is not None}
 
     def _check(self, s: Slot) -> None:
-        where = f"optimize.vary: {s.label}"
+        where = f"{self.section}: {s.label}"
         if s.key.startswith("drop.") and (self.chain or not self.ground):
             raise StackFileError(f"{where}: this stack starts from stack.velocities; there is no drop to vary")
         if s.key == "drop.height" and self.gravity <= 0:

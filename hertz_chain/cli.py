@@ -266,8 +266,10 @@ def sweep(
     except HertzChainError as exc:
         _fail(str(exc))
     per_design = 8 * (len(plan.sweep.axes) + 8 + plan.spec.n)
-    typer.echo(f"hertz-chain: sweep: {plan.size} designs in {plan.n_chunks} chunks; about "
-               f"{plan.size * per_design / 1e6:.3g} MB uncompressed", err=True)
+    plural = lambda k, word: f"{k} {word}{'' if k == 1 else 's'}"  # noqa: E731
+    typer.echo(f"hertz-chain: sweep: {plural(plan.size, 'design')} in {plural(plan.n_chunks, 'chunk')} of "
+               f"{plan.chunk_rows * plan.row} designs; about {plan.size * per_design / 1e6:.3g} MB uncompressed",
+               err=True)
     from .sweep import sweep as run_sweep
 
     try:
@@ -283,7 +285,7 @@ def sweep(
         rate = f", {summary['designs_per_second']:.3g} designs/s" if result.computed else ""
         counts = ", ".join(f"{k} {v}" for k, v in result.status_counts.items())
         typer.echo(f"{result.path}: {result.designs} designs; {result.computed} chunks computed, {result.skipped} "
-                   f"already done{rate}" + (f"; this run: {counts}" if counts else ""))
+                   f"already done{rate}; status: {counts}")
 
 
 @app.command("plot")

@@ -23,7 +23,8 @@ from dataclasses import dataclass
 
 from .errors import StackFileError
 
-__all__ = ["KeyRow", "KEYS", "Slot", "resolve", "read_entry", "read_bounds", "dimension"]
+__all__ = ["KeyRow", "KEYS", "Slot", "resolve", "read_entry", "read_bounds", "dimension", "allowed_values",
+           "valid_values", "check_values"]
 
 
 @dataclass(frozen=True)
@@ -110,7 +111,9 @@ def resolve(key: object, index: object, *, n: int, ground: bool, where: str = "k
         raise StackFileError(f"{where}.index: empty; give {row.over} numbers {allowed.start}..{allowed.stop - 1}")
     seen = []
     for i in items:
-        if isinstance(i, bool) or not isinstance(i, int) or i not in allowed:
+        if isinstance(i, bool) or not isinstance(i, int):
+            raise StackFileError(f"{where}.index: {i!r} is invalid: an integer {row.over} number (or a list of them)")
+        if i not in allowed:
             what = f"{row.over} numbers {allowed.start}..{allowed.stop - 1}" if len(allowed) else f"no {row.over}s"
             extra = " (interface 0 is the ground, which this stack has not)" if row.over == "interface" and i == 0 else ""
             raise StackFileError(f"{where}.index: {i!r} is out of range for {key} of this {n}-mass stack; "
@@ -151,9 +154,42 @@ def read_bounds(raw: object, dim: str, where: str) -> tuple[float, float]:
     """`[lower, upper]` with units -> SI floats, lower < upper. Raises `StackFileError`."""
     from .stackfile import parse_quantity
 
+    if raw is None:
+        raise StackFileError(f"{where}: missing; give [lower, upper] with units")
     if not isinstance(raw, list) or len(raw) != 2:
         raise StackFileError(f"{where}: {raw!r} is invalid: two values [lower, upper] with units")
     lo, hi = (parse_quantity(b, dim, where) for b in raw)
     if not (math.isfinite(lo) and math.isfinite(hi)) or not lo < hi:
         raise StackFileError(f"{where}: {raw!r} is invalid: the lower bound must be below the upper")
     return lo, hi
+
+
+def allowed_values(key: str) -> str:
+    """What `key` may be, for messages: `> 0`, `>= 0`, or `> 0 and <= 1`."""
+    row = KEYS[key]
+    base = "> 0" if row.positive else ">= 0"
+    return base + (f" and <= {row.upper:g}" if row.upper is not None else "")
+
+
+def valid_values(key: str, values):
+    """Elementwise: whether `values` (SI, a number or a numpy array) are allowed for `key` (`KeyRow`:
+    finite, > 0 or >= 0, at most `upper`)."""
+    import numpy as np
+
+    row = KEYS[key]
+    v = np.asarray(values, dtype=float)
+    ok = np.isfinite(v) & ((v > 0) if row.positive else (v >= 0))
+    if row.upper is not None:
+        ok &= v <= row.upper
+    return ok
+
+
+def check_values(key: str, values, where: str, shown=None) -> None:
+    """Raise `StackFileError` (one line) unless every value is allowed for `key`."""
+    import numpy as np
+
+    ok = valid_values(key, values)
+    if not np.all(ok):
+        bad = np.asarray(values, dtype=float).reshape(-1)[~ok.reshape(-1)][0]
+        raise StackFileError(f"{where}: {shown if shown is not None else repr(float(bad))} is invalid: {key} must be "
+                             f"{allowed_values(key)}")

@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from .errors import StackFileError
-from .keys import KEYS, Slot, dimension, read_bounds, read_entry, resolve
+from .keys import KEYS, Slot, check_values, dimension, read_bounds, read_entry, resolve
 from .stackfile import StackSpec, parse_quantity, parse_stack
 from .status import Status
 
@@ -249,6 +249,8 @@ def parse_optimize(raw: Any, spec: StackSpec) -> OptimizeSpec:
             if key in raw:
                 raise _err(f"optimize.{key}", "used only with objective = 'pulse'")
     vary = raw.get("vary")
+    if vary is not None and not isinstance(vary, list):
+        raise _err("optimize.vary", f"{vary!r} is invalid: give [[optimize.vary]] tables, each with a key and bounds")
     if not isinstance(vary, list) or not vary:
         raise _err("optimize.vary", "missing; give at least one [[optimize.vary]] with a key and bounds")
     entries = []
@@ -259,11 +261,7 @@ def parse_optimize(raw: Any, spec: StackSpec) -> OptimizeSpec:
         resolve(key, None, n=3, ground=True, where=f"{where}.key")  # known key (indices checked per n)
         row = KEYS[key]
         lo, hi = read_bounds(item.get("bounds"), dimension(spec, key, item.get("index")), f"{where}.bounds")
-        bounds = item["bounds"]
-        if (row.positive and lo <= 0) or lo < 0:
-            raise _err(f"{where}.bounds", f"{bounds!r} is invalid: {key} must be {'> 0' if row.positive else '>= 0'}")
-        if row.upper is not None and hi > row.upper:
-            raise _err(f"{where}.bounds", f"{bounds!r} is invalid: {key} is at most {row.upper:g}")
+        check_values(key, [lo, hi], f"{where}.bounds", shown=repr(item["bounds"]))
         if out.get("n") and "index" in item and row.over in ("mass", "gap"):
             raise _err(f"{where}.index", "with optimize.n give no index: the interior masses (or every gap) vary")
         entries.append(VarySpec(key, item.get("index"), (lo, hi), where))
@@ -805,7 +803,7 @@ def optimize(path: str | Path) -> OptimizeResult:
         report = run_spec(parse_stack(doc_best, source=str(path)))
     start = run_spec(spec)
     rigid = _rigid_designs(space, np.asarray(report.masses))
-    pg = _projected_gradient(ev, top.u)
+    pg = _projected_gradient(ev, top.u)  # NaN on the derivative-free path (None in the JSON)
     agree = sum(abs(r.value - top.value) <= 1e-6 * max(abs(top.value), 1e-2) for r in runs)
     active = [s.label + (" (lower)" if ui <= 1e-9 else " (upper)") for s, ui in zip(space.slots, top.u)
               if ui <= 1e-9 or ui >= 1 - 1e-9]
@@ -838,7 +836,7 @@ def optimize(path: str | Path) -> OptimizeResult:
                     "message": r.message, "success": r.success} for r in runs],
         "starts_agree": f"{agree} of {len(runs)} within 1e-6 (relative, at least 1e-8 absolute) of the best",
         "iterations": top.iterations,
-        "projected_gradient_norm": pg,
+        "projected_gradient_norm": pg if math.isfinite(pg) else None,
         "active_bounds": active,
         "history": top.history,
         "n_tried": list(ns),

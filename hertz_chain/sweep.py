@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from .errors import StackFileError
-from .keys import Slot, dimension, read_bounds, read_entry, resolve
+from .keys import Slot, check_values, dimension, read_bounds, read_entry, resolve, valid_values
 from .stackfile import StackSpec, load_stack_file, parse_quantity
 
 __all__ = ["SweepSpec", "AxisSpec", "SweepResult", "read_sweep_file", "check", "sweep", "COMBINE", "SAMPLES"]
@@ -116,6 +116,7 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
             if not isinstance(raw, list) or not raw:
                 raise _err(f"{where}.values", f"{raw!r} is invalid: a non-empty list of values with units")
             values = tuple(q(v, "values") for v in raw)
+            check_values(key, values, f"{where}.values")
         else:
             for k in ("start", "stop", "num"):
                 if k not in item:
@@ -130,8 +131,10 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
             if space == "log" and not (a > 0 and b > 0):
                 raise _err(f"{where}.start", "a log axis needs start and stop > 0")
             values = tuple((np.geomspace(a, b, num) if space == "log" else np.linspace(a, b, num)).tolist())
+            check_values(key, [a, b], f"{where}.start")
     elif sample in ("sobol", "lhs"):
         bounds = read_bounds(item.get("bounds"), dim, f"{where}.bounds")
+        check_values(key, bounds, f"{where}.bounds", shown=repr(item["bounds"]))
     else:  # montecarlo
         distribution = item.get("distribution", "normal")
         if distribution not in DISTRIBUTIONS:
@@ -144,6 +147,7 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
                 raise _err(f"{where}.std", f"{item['std']!r} is invalid: must be > 0")
         else:
             bounds = read_bounds(item.get("bounds"), dim, f"{where}.bounds")
+            check_values(key, bounds, f"{where}.bounds", shown=repr(item["bounds"]))
     return AxisSpec(key, index, values, bounds, distribution, std, where)
 
 
@@ -262,7 +266,11 @@ class _Plan:
         s = self.sweep
         d = len(s.axes)
         if s.sample == "sobol":
-            U = qmc.Sobol(d, scramble=True, seed=s.seed).random(s.samples)
+            import warnings
+
+            with warnings.catch_warnings():  # a count that is not a power of 2 is allowed (docs/sweeps.md)
+                warnings.simplefilter("ignore", UserWarning)
+                U = qmc.Sobol(d, scramble=True, seed=s.seed).random(s.samples)
         elif s.sample == "lhs":
             U = qmc.LatinHypercube(d, seed=s.seed).random(s.samples)
         else:
@@ -281,6 +289,12 @@ class _Plan:
 
 def _plan(spec: StackSpec, sweep: SweepSpec, n: int) -> _Plan:
     slots = tuple(resolve(a.key, a.index, n=n, ground=spec.has_ground, where=a.where) for a in sweep.axes)
+    seen: dict = {}
+    for a, axis in zip(sweep.axes, slots):
+        for sl in axis:
+            if sl in seen:
+                raise _err(f"{a.where}.index", f"{sl.label} is set by {seen[sl]} too; give the axes disjoint indices")
+            seen[sl] = a.where
     if sweep.sample is None and sweep.combine == "product":
         shape = tuple(len(a.values) for a in sweep.axes)
         dims = tuple(a.label for a in sweep.axes)
@@ -313,7 +327,7 @@ def _design_map(text: str, source: str | None):
         spec = with_masses(spec, design_masses(spec))
         plan = _plan(spec, sw, spec.n)
         flat = tuple(s for axis in plan.slots for s in axis)
-        dm = DesignMap(spec, flat)
+        dm = DesignMap(spec, flat, section="sweep.axis")
         base = dm.values()
         pos, k = [], 0
         for axis in plan.slots:
@@ -327,15 +341,16 @@ def _design_map(text: str, source: str | None):
 
 def _evaluate(text: str, source: str | None, c: int) -> dict:
     """The results of chunk `c` (numpy arrays, one entry per design of the chunk)."""
-    import jax
-
     from .rigid import stack_gain
     from .simulate import simulate_batch
 
     plan, dm, widths = _design_map(text, source)
     designs, fields_of = _CACHE[hashlib.sha256(text.encode()).hexdigest() + "jit"]  # compiled once per process
     V = plan.values(c)
-    X = np.repeat(V, widths, axis=1)  # an axis sets every slot it names to its value
+    # a sampled value outside what its key allows (a Monte-Carlo tail: a negative gap or mass) is not
+    # simulated: its design is reported failed (grid values and bounds were checked before the run)
+    valid = np.all([valid_values(a.key, V[:, k]) for k, a in enumerate(plan.sweep.axes)], axis=0)
+    X = np.repeat(np.where(valid[:, None], V, plan.base[None, :]), widths, axis=1)  # an axis sets its slots
     B = X.shape[0]
     size = plan.chunk_rows * plan.row  # pad to the full chunk: one compiled shape for every chunk
     if B < size:
@@ -359,7 +374,15 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
            "num_steps": sol.num_steps.astype(np.int64), "t_final": sol.t_final}
     if plan.dims == ("design",):
         out["values"] = V
-    return {k: np.asarray(v)[:B] for k, v in out.items()}
+    out = {k: np.asarray(v)[:B] for k, v in out.items()}
+    if not np.all(valid):
+        from .status import Status
+
+        out["status"] = np.where(valid, out["status"], np.int8(Status.FAILED)).astype(np.int8)
+        for k in ("top_velocity_gain", "velocity_gains", "rigid_gain", "rigid_deficit", "energy_error", "t_final"):
+            out[k] = np.where(valid.reshape((-1,) + (1,) * (out[k].ndim - 1)), out[k], np.nan)
+        out["num_steps"] = np.where(valid, out["num_steps"], 0)
+    return out
 
 
 # ------------------------------------------------------------------------------------------ the store
@@ -483,7 +506,7 @@ def _done(path: Path) -> set[int]:
 @dataclasses.dataclass(frozen=True)
 class SweepResult:
     """What `sweep` did: the store, the number of designs and chunks, how many chunks were computed in
-    this run (`computed`) and were already done (`skipped`), the designs per second and the status counts."""
+    this run (`computed`) and were already done (`skipped`), and the status counts of the whole store."""
 
     path: Path
     designs: int
@@ -496,7 +519,8 @@ class SweepResult:
     def to_dict(self) -> dict:
         return {"output": str(self.path), "designs": self.designs, "chunks": self.chunks, "computed": self.computed,
                 "skipped": self.skipped, "seconds": self.seconds,
-                "designs_per_second": self.designs * self.computed / max(self.chunks, 1) / max(self.seconds, 1e-9),
+                "designs_per_second": (self.designs * self.computed / max(self.chunks, 1) / max(self.seconds, 1e-9)
+                                       if self.computed else None),
                 "status_counts": self.status_counts}
 
 
@@ -507,8 +531,10 @@ def check(path: str | Path, output: str | Path) -> tuple[_Plan, str]:
     from .errors import OutputPathError
 
     spec, sw, text = read_sweep_file(path)
-    n = spec.n
-    plan = _plan(spec, sw, n)
+    try:
+        plan = _design_map(text, str(path))[0]  # every check of the axes against the file, before any store
+    except StackFileError as exc:
+        raise StackFileError(f"{path}: {exc}") from None
     out = Path(output)
     if out.suffix != ".zarr":
         raise OutputPathError("--output", out, "a sweep store is a folder ending in .zarr")
@@ -564,10 +590,14 @@ def sweep(path: str | Path, output: str | Path, *, workers: int | None = None, s
     finally:
         if bar is not None:
             bar[0].stop()
+    import zarr
+
     from .status import Status
 
+    codes, k = np.unique(np.asarray(zarr.open_array(str(output / "status"), mode="r")[...]), return_counts=True)
+    store_counts = {Status(int(c)).text: int(v) for c, v in zip(codes, k) if c >= 0}
     return SweepResult(output, plan.size, plan.n_chunks, len(todo), plan.n_chunks - len(todo),
-                       time.perf_counter() - t0, {Status(k).text: v for k, v in sorted(counts.items())})
+                       time.perf_counter() - t0, store_counts)
 
 
 def _progress(enabled: bool, plan: _Plan, chunks: int):

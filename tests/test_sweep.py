@@ -128,6 +128,13 @@ def test_dask_local_cluster_gives_the_same_store(tmp_path):
      ["start", "stiffness"]),
     ({"axis": [{"key": "stack.gaps", "space": "cubic", "start": 0, "stop": 1e-3, "num": 3}]}, ["space", "linear, log"]),
     ({}, ["sweep.axis", "missing"]),
+    ({"axis": [{"key": "stack.gaps", "values": ["-1 mm", "1 mm"]}]}, ["sweep.axis[0].values", "-0.001", ">= 0"]),
+    ({"axis": [{"key": "contact.restitution", "values": [1.5, 0.5]}]}, ["restitution", "<= 1"]),
+    ({"axis": [{"key": "drop.impact_velocity", "values": ["0 m/s"]}]}, ["impact_velocity", "> 0"]),
+    ({"sample": "lhs", "samples": 4, "axis": [{"key": "stack.masses", "index": 2, "bounds": ["-1 kg", "1 kg"]}]},
+     ["bounds", "> 0"]),
+    ({"axis": [{"key": "stack.gaps", "values": [0, 1e-3]}, {"key": "stack.gaps", "index": [1], "values": [0]}]},
+     ["stack.gaps[1]", "sweep.axis[0] too"]),
 ])
 def test_bad_sweep_sections_give_one_line_and_exit_2(tmp_path, capsys, section, words):
     path = _file(tmp_path, section)
@@ -163,3 +170,33 @@ def test_a_store_of_another_sweep_or_a_foreign_folder_is_refused(tmp_path, capsy
             main(["plot", str(out), *flags, "--output", str(tmp_path / "x.png")])
         err = capsys.readouterr().err
         assert exc.value.code == 2 and err.startswith(f"hertz-chain: error: {word}") and err.count("\n") == 1
+
+
+def test_monte_carlo_tails_outside_a_key_s_range_are_failed_designs_not_a_failed_sweep(tmp_path):
+    """A normal tolerance of 0.5 mm on touching gaps: about half the samples are negative gaps, which no
+    stack may have. They are reported failed (status 5, NaN gains) and the others are simulated."""
+    mc = {"sample": "montecarlo", "samples": 8, "seed": 1, "chunk": 8,
+          "axis": [{"key": "stack.gaps", "distribution": "normal", "std": "0.5 mm"}]}
+    doc = BASE | {"stack": {"masses": [1.0, 0.3, 0.1], "gaps": 0}, "sweep": mc}
+    path = tmp_path / "mc.toml"
+    path.write_text(tomli_w.dumps(doc))
+    ds = _open(sweep(path, tmp_path / "mc.zarr").path)
+    gaps = ds["stack.gaps"].values
+    rng = np.random.default_rng(1)
+    np.testing.assert_allclose(gaps, 0.5e-3 * rng.standard_normal(8), rtol=1e-15)  # numpy's own draw
+    bad = gaps < 0
+    assert bad.any() and (~bad).any()
+    assert np.all(ds.status.values[bad] == hc.Status.FAILED) and np.all(np.isnan(ds.top_velocity_gain.values[bad]))
+    assert np.all(ds.status.values[~bad] == hc.Status.COMPLETE) and np.all(ds.top_velocity_gain.values[~bad] > 1)
+
+
+def test_an_axis_a_law_cannot_take_is_refused_before_any_store(tmp_path, capsys):
+    doc = BASE | {"contact": {"law": "hertz", "stiffness": "1e9 N/m^1.5"},
+                  "sweep": {"axis": [{"key": "contact.restitution", "values": [0.5]}]}}
+    path = tmp_path / "h.toml"
+    path.write_text(tomli_w.dumps(doc))
+    with pytest.raises(SystemExit) as exc:
+        main(["sweep", str(path), "--output", str(tmp_path / "h.zarr")])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and f"{path}: sweep.axis: contact.restitution" in err and "elastic" in err
+    assert not (tmp_path / "h.zarr").exists()
