@@ -780,6 +780,7 @@ def optimize(path: str | Path) -> OptimizeResult:
     ns = [sp.n for sp in spaces]
     best = None
     evaluators = []
+    per_n: dict = {}  # the best of every number of masses tried (search values, before the exact re-run)
     for space in spaces:
         ev = _Evaluator(space, problem)
         u_file = space.to_u(space.dm.values())
@@ -789,6 +790,8 @@ def optimize(path: str | Path) -> OptimizeResult:
         evaluators.append(ev)
         runs.sort(key=lambda r: r.value)
         top = runs[0]
+        per_n[str(space.n)] = {"objective_value": top.value, "starts": len(runs),
+                               "masses": np.asarray(space.dm.fields(space.to_x(top.u))["stack.masses"]).tolist()}
         if best is None or top.value < best[1][0].value:
             best = (space, runs, ev)
     space, runs, ev = best
@@ -840,6 +843,7 @@ def optimize(path: str | Path) -> OptimizeResult:
         "active_bounds": active,
         "history": top.history,
         "n_tried": list(ns),
+        "per_n": per_n,
         "why": why,
         **extra,
     }

@@ -278,6 +278,8 @@ def test_numbers_of_masses_are_compared_and_the_best_wins(tmp_path):
     assert result.top_velocity_gain == pytest.approx(eq20(4), rel=1e-5)
     np.testing.assert_allclose(result.masses, m1 * R ** (np.arange(4) / 3), rtol=1e-3)
     assert len(result.gaps) == 3 and result.gaps[0] == pytest.approx(0.05)
+    per_n = result.convergence["per_n"]  # n = 3 is reported too, with Eq 20's gain for n = 3
+    assert -per_n["3"]["objective_value"] == pytest.approx(eq20(3), rel=1e-5)
 
 
 def test_a_binding_mass_budget_is_met_exactly(tmp_path):
