@@ -268,12 +268,18 @@ def sweep(
     per_design = 8 * (len(plan.sweep.axes) + 8 + plan.spec.n)
     plural = lambda k, word: f"{k} {word}{'' if k == 1 else 's'}"  # noqa: E731
     typer.echo(f"hertz-chain: sweep: {plural(plan.size, 'design')} in {plural(plan.n_chunks, 'chunk')} of "
-               f"{plan.chunk_rows * plan.row} designs; about {plan.size * per_design / 1e6:.3g} MB uncompressed",
+               f"up to {plan.chunk_rows * plan.row} designs; about {plan.size * per_design / 1e6:.3g} MB uncompressed",
                err=True)
     from .sweep import sweep as run_sweep
 
+    def estimate(done, todo, seconds):  # once, after the first chunk (the progress bar has an ETA on a terminal)
+        if done == 1 and todo > 1 and not sys.stderr.isatty():
+            typer.echo(f"hertz-chain: sweep: first chunk in {seconds:.1f} s (with compilation); about "
+                       f"{seconds * (todo - 1):.0f} s or less for the other {todo - 1}", err=True)
+
     try:
-        result = run_sweep(stack_file, output, workers=workers, scheduler=scheduler, progress=sys.stderr.isatty())
+        result = run_sweep(stack_file, output, workers=workers, scheduler=scheduler, progress=sys.stderr.isatty(),
+                           on_chunk=estimate)
     except HertzChainError as exc:
         _fail(str(exc))
     summary = result.to_dict()

@@ -152,13 +152,13 @@ def _parse_srs(raw: dict) -> dict:
     table = raw.get("target_srs")
     where = "optimize.target_srs"
     if not isinstance(table, list) or len(table) < 2:
-        raise _err(where, "missing or too short; give rows [frequency, level], e.g. [[100, 50], [1000, 1500]] "
+        raise _err(where, "missing or too short; give rows [frequency, level], e.g. [[100, 50], [\"1 kHz\", 1500]] "
                    "(Hz and g), at least two")
     rows = []
     for i, row in enumerate(table):
         if not isinstance(row, list) or len(row) != 2:
             raise _err(f"{where}[{i}]", f"{row!r} is invalid: a row [frequency, level]")
-        f = row[0]
+        f = parse_quantity(row[0], "frequency", f"{where}[{i}][0]") if isinstance(row[0], str) else row[0]
         if isinstance(f, bool) or not isinstance(f, (int, float)) or not (math.isfinite(f) and 1e-3 <= f <= 1e6):
             raise _err(f"{where}[{i}][0]", f"{row[0]!r} is invalid: a frequency in Hz, 1e-3 to 1e6")
         a = row[1]
@@ -227,6 +227,9 @@ def parse_optimize(raw: Any, spec: StackSpec) -> OptimizeSpec:
         out["max_peak_force"] = _positive(raw["max_peak_force"], "optimize.max_peak_force", "force")
     for key in ("max_peak_g", "target_peak_g"):
         if key in raw:
+            if isinstance(raw[key], str):  # "1500 g" would read as grams
+                raise _err(f"optimize.{key}", f"{raw[key]!r} is invalid: a plain number of g (standard gravity, "
+                           "9.80665 m/s^2), e.g. 1500")
             out[key] = _positive(raw[key], f"optimize.{key}", "dimensionless")
     if "target_duration" in raw:
         out["target_duration"] = _positive(raw["target_duration"], "optimize.target_duration", "time")

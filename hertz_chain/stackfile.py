@@ -100,13 +100,14 @@ LIMITS = {
     "viscous_damping": (0.0, 1e9),
     "inverse_velocity": (0.0, 1e6),
     "force": (0.0, 1e12),
+    "frequency": (0.0, 1e9),
 }
 """Dimension -> (smallest non-zero magnitude, largest magnitude), SI. A magnitude outside is an error
 naming the key; 0 is left to each key's own sign rule (a mass must still be > 0)."""
 
 _UNITS = {"mass": "kg", "length": "m", "time": "s", "velocity": "m/s", "acceleration": "m/s^2",
           "pressure": "Pa", "density": "kg/m^3", "hertz_stiffness": "N/m^1.5", "linear_stiffness": "N/m",
-          "viscous_damping": "N s/m", "inverse_velocity": "s/m", "force": "N"}
+          "viscous_damping": "N s/m", "inverse_velocity": "s/m", "force": "N", "frequency": "Hz"}
 
 # the vocabularies: one table each in `hertz_chain.registry`
 CONTACT_LAWS = tuple(LAWS)
@@ -148,6 +149,7 @@ _DIMENSIONS = {
     "length": ("m", "a length (e.g. '1 cm')"),
     "mass": ("kg", "a mass (e.g. '1 kg')"),
     "time": ("s", "a time (e.g. '1 us')"),
+    "frequency": ("Hz", "a frequency (e.g. '1 kHz')"),
     "velocity": ("m/s", "a velocity (e.g. '1 m/s')"),
     "acceleration": ("m/s^2", "an acceleration (e.g. '9.81 m/s^2')"),
     "force": ("N", "a force (e.g. '10 kN')"),

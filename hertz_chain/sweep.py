@@ -553,13 +553,14 @@ def check(path: str | Path, output: str | Path) -> tuple[_Plan, str]:
 
 
 def sweep(path: str | Path, output: str | Path, *, workers: int | None = None, scheduler: str | None = None,
-          progress: bool = False) -> SweepResult:
+          progress: bool = False, on_chunk=None) -> SweepResult:
     """Run the sweep of the stack file `path` into the Zarr store `output` (module docstring).
 
     **Arguments:** `workers`: run the chunks on a local Dask cluster of that many worker processes;
     `scheduler`: the address of an existing Dask scheduler (`tcp://host:port`); neither: in this process,
     every CPU core a JAX device (`simulate_batch` splits each chunk over them). `progress`: a rich
-    progress bar on stderr.
+    progress bar on stderr. `on_chunk(done, todo, seconds)`: called after every chunk written in this
+    run (the command line prints a time estimate from the first).
 
     **Returns** a `SweepResult`. An existing store of the same sweep is resumed: only chunks without a
     marker run. **Raises** `StackFileError`/`OutputPathError` before anything runs.
@@ -574,8 +575,13 @@ def sweep(path: str | Path, output: str | Path, *, workers: int | None = None, s
     counts: dict[int, int] = {}
     bar = _progress(progress, plan, len(todo))
 
+    written = [0]
+
     def finish(c, res):
         _write_chunk(output, plan, c, res)
+        written[0] += 1
+        if on_chunk is not None:
+            on_chunk(written[0], len(todo), time.perf_counter() - t0)
         for code, k in zip(*np.unique(res["status"], return_counts=True)):
             counts[int(code)] = counts.get(int(code), 0) + int(k)
         if bar is not None:
