@@ -393,6 +393,7 @@ class _Evaluator:
 
         self.space, self.problem = space, problem
         self.count = 0
+        self._stencil = None
         self.g = space.dm.gravity
         from .registry import LAWS
 
@@ -421,20 +422,24 @@ class _Evaluator:
         """The negative gain at `u` and its central-difference gradient, the 2d + 1 designs in one
         compiled, vmapped solve (`simulate_batch`); the stencil is kept inside the box."""
         import jax
+        import jax.numpy as jnp
 
         from .simulate import Tolerances, simulate_batch
 
         d, h = len(u), self.FD_STEP
         c = np.clip(u, h, 1.0 - h)
         U = np.vstack([u[None, :], c + h * np.eye(d), c - h * np.eye(d)])
-        X = jax.vmap(self.space.to_x)(U)
-        stacks, states = jax.vmap(self.space.dm)(X)
+        if self._stencil is None:  # the designs of a stencil, compiled once
+            sp = self.space
+            self._stencil = jax.jit(lambda U: (*jax.vmap(lambda u: sp.dm(sp.to_x(u)))(U),
+                                               jax.vmap(lambda u: sp.dm.drop_speed(sp.to_x(u)))(U)
+                                               if not sp.dm.chain else jnp.ones(U.shape[0])))
+        stacks, states, speed = self._stencil(U)
         sol = simulate_batch(stacks, states, save_steps=False, max_steps=16_384, until="launch",
                              tolerances=Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True))
         if not np.all(sol.ok):
             raise RuntimeError(f"a design of the stencil did not complete: {sol.status_code} {sol.num_steps}")
-        speed = (np.asarray(jax.vmap(self.space.dm.drop_speed)(X)) if not self.space.dm.chain
-                 else self.space.dm.drop_speed(None))
+        speed = np.asarray(speed) if not self.space.dm.chain else self.space.dm.drop_speed(None)
         f = -sol.launch_velocities[:, -1] / speed
         return f[0], (f[1 : d + 1] - f[d + 1 :]) / (2 * h)
 
