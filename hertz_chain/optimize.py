@@ -457,7 +457,6 @@ class _Evaluator:
             v, g = 1e3, np.zeros(len(u))
         if not (math.isfinite(v) and np.all(np.isfinite(g))):
             v, g = 1e3, np.zeros(len(u))
-        self.last = (u.copy(), v)
         return v, g
 
     # exact path ----------------------------------------------------------------------------
