@@ -1,8 +1,23 @@
-"""Test configuration: float64 everywhere, as in the library (hertz_chain._config)."""
+"""Test configuration: float64 everywhere, as in the library (hertz_chain._config).
 
+The on-disk caches are on, as for users (`hertz_chain._cache`), but in a fresh folder for this test session
+only: nothing is read from an earlier run or from the user's own cache, and compiles are shared between
+the two pytest-xdist workers and the command-line and notebook subprocesses of the session (it halves
+the suite's compile time). The folder is made by the first process that loads this file (the xdist
+controller); the workers and subprocesses inherit it through the environment. Set
+`HERTZ_CHAIN_NO_CACHE=1` to run the whole suite without any cache.
+"""
+
+import atexit
 import os
+import shutil
+import tempfile
 
-os.environ.setdefault("HERTZ_CHAIN_NO_CACHE", "1")  # tests measure nothing from a warm disk cache
+if not os.environ.get("HERTZ_CHAIN_NO_CACHE") and not os.environ.get("HERTZ_CHAIN_TEST_CACHE"):
+    _session_cache = tempfile.mkdtemp(prefix="hertz-chain-test-cache-")
+    os.environ["HERTZ_CHAIN_TEST_CACHE"] = _session_cache
+    os.environ["HERTZ_CHAIN_CACHE_DIR"] = _session_cache
+    atexit.register(shutil.rmtree, _session_cache, ignore_errors=True)
 # two CPU devices on every machine, so that simulate_batch's split over devices is always exercised
 os.environ.setdefault("HERTZ_CHAIN_CPU_DEVICES", "2")
 

@@ -3,7 +3,7 @@
 Each `notebooks/0*.py` (jupytext percent format) is parsed into a notebook in memory with jupytext
 and executed cell by cell with nbclient in a `python3` kernel, with the working directory `notebooks/`
 (where `_nbutil.py` lives) and `HERTZ_CHAIN_QUICK=1` (coarse grids; each notebook takes well under a
-minute). `HERTZ_CHAIN_NO_CACHE=1` comes from `conftest.py` and reaches the kernel through the
+minute). The test session's cache folder comes from `conftest.py` and reaches the kernel through the
 environment; `HERTZ_CHAIN_WRITE_TABLES` and `HERTZ_CHAIN_FIG_DIR` are removed, so a test run never
 writes into the repository. The notebooks' own `assert`s check the paper's statements; a failing cell
 fails the test with that cell's error.
@@ -71,7 +71,6 @@ def test_notebook_parses(path):
 @pytest.fixture
 def quick_env(monkeypatch):
     monkeypatch.setenv("HERTZ_CHAIN_QUICK", "1")
-    monkeypatch.setenv("HERTZ_CHAIN_NO_CACHE", os.environ.get("HERTZ_CHAIN_NO_CACHE", "1"))
     monkeypatch.setenv("MPLBACKEND", "Agg")
     for var in ("HERTZ_CHAIN_WRITE_TABLES", "HERTZ_CHAIN_FIG_DIR"):
         monkeypatch.delenv(var, raising=False)

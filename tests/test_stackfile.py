@@ -654,6 +654,7 @@ def test_unit_registry_cache_never_stops_a_run(tmp_path, broken):
     code = "from hertz_chain.stackfile import parse_quantity; print(parse_quantity('1 cm', 'length'))"
     env = {**__import__("os").environ, "XDG_CACHE_HOME": str(tmp_path)}
     env.pop("HERTZ_CHAIN_NO_CACHE", None)
+    env.pop("HERTZ_CHAIN_CACHE_DIR", None)  # the test session's own cache folder (conftest.py)
     if broken == "file":
         (tmp_path / "hertz_chain").write_text("not a folder")
     else:  # a real cache, written by a first run, then every file in it damaged
