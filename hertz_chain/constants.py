@@ -8,6 +8,7 @@ STANDARD_GRAVITY = 9.80665
 G0 = STANDARD_GRAVITY
 """The unit 'g' of acceleration pulses: `a [g] = a [m/s²] / G0`."""
 
-MAX_MASSES = 50
-"""The most masses a stack may have (`Stack`, stack files, `hertz-chain design`). Defined here, free of
+MAX_MASSES = 1000
+"""The most masses a stack may have (`Stack`, stack files, `hertz-chain design`): long granular chains
+(Nesterenko; Sen; Daraio use 100-1,000 beads). Every per-step operation is linear in n (no n x n work). Defined here, free of
 JAX, so that the stack-file checks and the command line refuse a larger stack before importing it."""

@@ -147,7 +147,7 @@ def summary_table(report: Report, title: str | None = None) -> str:
                         if done else "the gains below are not those of a finished cascade"))
     if math.isfinite(r.cascade_end_time):
         lines.append(f"first cascade ended at {r.cascade_end_time * 1e3:.4g} ms")
-    lines.append(f"drop speed {r.drop_speed:.4g} m/s, {len(r.masses)} masses "
+    lines.append(f"drop speed {r.drop_speed:.4g} m/s, {len(r.masses)} mass{'es' if len(r.masses) != 1 else ''} "
                  f"({', '.join(f'{m:.4g}' for m in r.masses)} kg)")
     lines.append("")
     lines.append("top-mass velocity gain G_n = V_n / v_ff")

@@ -164,10 +164,10 @@ def _interface_array(restitution, n: int, name: str) -> np.ndarray:
     return e[..., 1:]
 
 
-def _masses(masses, name: str = "masses") -> np.ndarray:
+def _masses(masses, name: str = "masses", minimum: int = 2) -> np.ndarray:
     m = _check_positive(masses, name)
-    if m.ndim == 0 or m.shape[-1] < 2:
-        raise ParameterError(name, _show(m), "need at least 2 masses (last axis)")
+    if m.ndim == 0 or m.shape[-1] < minimum:
+        raise ParameterError(name, _show(m), f"need at least {minimum} mass{'es' if minimum > 1 else ''} (last axis)")
     return m
 
 
@@ -287,8 +287,9 @@ def stack_gain(masses, restitution, ground_restitution=None):
 
     `restitution`: scalar or `(..., n)` over interfaces, entry 0 = ground; `ground_restitution`, when
     given, overrides entry 0 (and a scalar `restitution`). `e_{1,0} > 1` ('active ground') is allowed.
+    One mass (`n = 1`): the ground bounce alone, `G_1 = e_{1,0}`.
     """
-    m = _masses(masses)
+    m = _masses(masses, minimum=1)
     n = m.shape[-1]
     e_all = _arr(restitution)
     if ground_restitution is None:
@@ -314,7 +315,7 @@ def cascade_velocities(masses, restitution, ground_restitution=None, velocities=
     velocity after it has struck the mass above (equal to `after_hit` for the top mass). A MET stack
     (Eq 25) leaves `after_pass` zero for all masses but the top.
     """
-    m = _masses(masses)
+    m = _masses(masses, minimum=1 if ground_restitution is not None else 2)  # one mass: the ground bounce
     n = m.shape[-1]
     e = _check_e(_interface_array(restitution, n, "restitution"), "restitution")
     e = np.broadcast_to(e, m.shape[:-1] + (n - 1,))

@@ -87,7 +87,7 @@ class Stack(eqx.Module):
 
     **Arguments:**
 
-    - `masses`: `(n,)` masses in kg, numbered from the bottom, `1 <= n <= 50` (`n = 1` needs the ground).
+    - `masses`: `(n,)` masses in kg, numbered from the bottom, `1 <= n <= 1000` (`constants.MAX_MASSES`; `n = 1` needs the ground).
     - `laws`: the contact law of every interface. Either one law (used for every interface; its
       parameters are scalars, or arrays of shape `(n_interfaces,)` for one value per interface), or a
       sequence with one law per interface: length `n` with the ground (entry 0 is ground–mass 1), length

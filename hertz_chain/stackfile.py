@@ -881,12 +881,8 @@ def _parse_stack(raw: Any, default_restitution: float | None) -> BodiesSpec:
         m = t["masses"]
         if not isinstance(m, (list, tuple)):
             raise _error("stack.masses", f"expected a list of masses (bottom first), got {_show(m)}")
-        if len(m) < 2:
-            raise _error(
-                "stack.masses",
-                f"has {len(m)} entr{'y' if len(m) == 1 else 'ies'}; a stack needs at least 2 "
-                "masses",
-            )
+        if len(m) < 1:
+            raise _error("stack.masses", "is empty; a stack needs at least 1 mass (2 without the ground)")
         if len(m) > MAX_MASSES:
             raise _error("stack.masses", f"has {len(m)} entries; a stack has at most {MAX_MASSES} masses")
         masses = tuple(_positive(x, f"stack.masses[{i}]", "mass") for i, x in enumerate(m))
@@ -1039,6 +1035,9 @@ def _build(data: Mapping) -> StackSpec:
     contacts, overrides = _parse_contact(top.get("contact"), has_ground=has_ground)
     bodies = _parse_stack(top.get("stack"), contacts.default.restitution)
     n = bodies.n
+    if n == 1 and not has_ground:
+        raise _error("stack.masses", "has 1 entry but drop.ground = false; a chain without the ground needs "
+                     "at least 2 masses (one mass needs the ground to hit)")
 
     # --- the drop and the initial state
     gravity = None

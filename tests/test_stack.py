@@ -145,7 +145,7 @@ def test_batched_designs_and_grad_through_builders():
     "make",
     [
         lambda: Stack([1.0, -0.5], Hertz(1e9)),
-        lambda: Stack(np.ones(51), Hertz(1e9)),
+        lambda: Stack(np.ones(1001), Hertz(1e9)),
         lambda: Stack([1.0], Hertz(1e9), ground=False),
         lambda: Stack([1.0, 0.5], Hertz(1e9), gravity=-1.0),
         lambda: Stack([1.0, 0.5, 0.2], [Hertz(1e9), Hertz(1e9)]),
