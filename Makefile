@@ -28,6 +28,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py --output benchmarks/results.md --json benchmarks/results.json
 	$(BIN)/python benchmarks/optimize.py --output benchmarks/optimize.md
 	$(BIN)/python benchmarks/sweep.py --output benchmarks/sweep.md
+	$(BIN)/python benchmarks/long_chains.py --output benchmarks/long_chains.md
 
 # A one-minute smoke run (n = 2, one regime) into out/; CI runs the same through tests/test_benchmarks_smoke.py.
 bench-smoke: $(STAMP)
