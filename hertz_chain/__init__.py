@@ -36,6 +36,7 @@ _EXPORTS = {
     "KelvinVoigt": "contact",
     "Tsuji": "contact",
     "Viscoelastic": "contact",
+    "Thornton": "contact",
     "make_law": "contact",
     "ContactEpisode": "episodes",
     "contact_episodes": "episodes",

@@ -47,7 +47,7 @@ def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _Config):
     del perturbed
     hist_t, hist_y, idx, valid = residuals
     stack, y0s = diff
-    n3 = 3 * stack.n
+    n3 = stack.state_size
     N = jnp.sum(jnp.isfinite(hist_t)) - 1  # accepted steps: rows 0..N of the history are finite
     ct_hist = jnp.zeros_like(hist_y)
     if g["y_fin"] is not None:
@@ -70,8 +70,8 @@ def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _Config):
         args = (eqx.combine(dyn, static), scale, T)
         return solver.step(terms, t0, t1, y, args, solver.init(terms, t0, t1, y, args), False)[0]
 
-    # The onset proxies (`resolve_onsets`, entries 3n:) feed nothing back into the motion and no output
-    # depends on them: replay the 3n physical equations only (the same arithmetic, component by component).
+    # The onset proxies (`resolve_onsets`, entries state_size:) feed nothing back into the motion and no output
+    # depends on them: replay the physical equations only (the same arithmetic, component by component).
     ct_hist = ct_hist[:, :n3]
 
     def body(i, carry):

@@ -20,7 +20,9 @@ class Trajectory:
     - `t` (s); `positions` (m), `velocities` (m/s), `accelerations` (m/s²) of the masses, upward;
     - `overlaps` (m, > 0 compression), `overlap_rates` (m/s, > 0 approaching), `forces` (N) and
       `dissipated` (J, cumulative) of the interfaces;
-    - `energy` (J): kinetic + gravitational + elastic + dissipated, constant in an exact solution.
+    - `energy` (J): kinetic + gravitational + elastic + dissipated, constant in an exact solution;
+    - `max_overlaps` (m): the largest overlap of every interface so far, for a stack with an
+      elastic–plastic law (`Stack.memory`); None otherwise.
     """
 
     t: np.ndarray
@@ -32,6 +34,7 @@ class Trajectory:
     forces: np.ndarray
     dissipated: np.ndarray
     energy: np.ndarray
+    max_overlaps: np.ndarray | None = None
 
     @classmethod
     def _from(cls, d: dict, trim: bool) -> Trajectory:
@@ -43,7 +46,7 @@ class Trajectory:
             alive = np.isfinite(arrs["positions"]).all(axis=-1)
             arrs = {k: (v if k == "t" else np.where(alive.reshape(alive.shape + (1,) * (v.ndim - 1)), v, np.nan))
                     for k, v in arrs.items()}
-        return cls(**{f.name: arrs[f.name] for f in dataclasses.fields(cls)})
+        return cls(**{f.name: arrs[f.name] for f in dataclasses.fields(cls) if f.name in arrs})
 
 
 @dataclasses.dataclass(frozen=True)

@@ -23,8 +23,10 @@ class Scales(eqx.Module):
     velocity: Array
     energy: Array
 
-    def vector(self, n: int) -> Array:
-        return jnp.concatenate([jnp.full(n, self.length), jnp.full(n, self.velocity), jnp.full(n, self.energy)])
+    def vector(self, n: int, memory: bool = False) -> Array:
+        """The scale of every entry of the flat state `[x, v, D (, q)]` (`Stack.state_size`)."""
+        parts = [jnp.full(n, self.length), jnp.full(n, self.velocity), jnp.full(n, self.energy)]
+        return jnp.concatenate(parts + [jnp.full(n, self.length)] if memory else parts)
 
 
 def _speed(stack: Stack, state: State) -> Array:

@@ -22,12 +22,13 @@ from .stack import Stack, State
 from .status import Status
 
 def _scaled_field(t, ys, args):
-    """The scaled vector field of the solver's state `[x, v, D (3n) | z (n, with resolve_onsets) | over]`.
+    """The scaled vector field of the solver's state `[x, v, D (3n) (, q (n), a law with memory) | z (n,
+    with resolve_onsets) | over]`.
 
     `over` (the last entry) is no variable of the motion: its derivative is zero, and `_Tracked` writes
     the cascade-over flag of `_cascade_over` into it after every step, so that the stopping event reads
-    one number instead of evaluating the rule again. A state of exactly `3n` entries (the replayed
-    adjoint's physical part) gets the `3n` physical derivatives."""
+    one number instead of evaluating the rule again. A state of exactly the physical size
+    (`Stack.state_size`: the replayed adjoint's physical part) gets the physical derivatives only."""
     stack, scale, T = args[:3]
     n3 = scale.shape[0]
     y = ys[:n3] * scale
@@ -46,20 +47,24 @@ def _scaled_field(t, ys, args):
 def _derived(stack: Stack, y):
     """Physical quantities of SI states `(..., 3n)`."""
     x, v, diss = stack.split(y)
+    q = stack.memory(y)
     d, dd = stack.overlaps(x), stack.overlap_rates(v)
-    f = stack.forces(d, dd)
-    return dict(
+    f = stack.forces(d, dd, q)
+    out = dict(
         positions=x, velocities=v, accelerations=stack.accelerations(f), overlaps=d,
         overlap_rates=dd, forces=f, dissipated=diss, energy=stack.total_energy(y),
     )
+    if q is not None:
+        out["max_overlaps"] = q
+    return out
 
 
 def _setup(stack: Stack, state: State, t_max, cfg: _Config):
     """Scales, the scaled initial state and the scaled end time of a solve."""
     n = stack.n
     sc = _scales(stack, state)
-    scale = sc.vector(n)
-    y0 = state.flat()
+    scale = sc.vector(n, stack.has_memory)
+    y0 = stack.initial_vector(state)
     t1 = jnp.where(jnp.isnan(t_max), _default_t_max(stack, state, sc), t_max)
     proxies = jnp.zeros(n if cfg.tolerances.resolve_onsets else 0)
     y0s = jnp.concatenate([y0 / scale, proxies, jnp.zeros(1)])  # `_scaled_field`: [x v D | z | over]
@@ -121,7 +126,7 @@ def _outputs(stack: Stack, sc: Scales, scale, core: dict, until: str = "cascade"
     when the cascade ended (mass 1 resting on the ground) is given its velocity then: the final state
     of a solve stopped by the event (`until="cascade"`; it carries the reverse-mode cotangent), the
     velocities kept in `_Contacts.cascade` otherwise."""
-    n, n3 = stack.n, 3 * stack.n
+    n, n3 = stack.n, stack.state_size
     t_fin = core["t_fin"] * sc.time
     y_fin = core["y_fin"][:n3] * scale
     v_fin = stack.split(y_fin)[1]
@@ -151,7 +156,7 @@ def _outputs(stack: Stack, sc: Scales, scale, core: dict, until: str = "cascade"
 
 
 def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, full: bool = True):
-    n3 = 3 * stack.n
+    n3 = stack.state_size
     sc, scale, y0s, t1s = _setup(stack, state, t_max, cfg)
     sol = _diffeqsolve(stack, y0s, t1s, scale, sc.time, None if ts is None else ts / sc.time, cfg,
                        history=cfg.save_steps, audit=full and not cfg.save_steps)
@@ -186,7 +191,7 @@ def _history_impl(stack: Stack, history, sc: Scales, rows: int):
     """Physical quantities and the energy audit of the first `rows` points of a saved step history
     (scaled; points after the solve's end are inf)."""
     ys, ts = history
-    steps = _derived(stack, ys[:rows] * sc.vector(stack.n))
+    steps = _derived(stack, ys[:rows] * sc.vector(stack.n, stack.has_memory))
     steps["t"] = ts[:rows] * sc.time
     err = jnp.where(jnp.isfinite(steps["t"]), jnp.abs(steps["energy"] - steps["energy"][0]), 0.0)
     return steps, jnp.max(err) / sc.energy

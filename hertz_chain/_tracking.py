@@ -26,7 +26,7 @@ _SETTLED = 1e-6
 _QUIET = 1e-12
 
 
-def _cascade_over(t, ys, args, x, v, d, dd, closed):
+def _cascade_over(t, ys, args, x, v, d, dd, closed, q=None):
     """The first cascade is over (issue 16's rule; README, "The launch, the cascade and the statuses"):
     something has touched, and for some `k` (0..n) the masses `1..k` rest on the ground while everything
     above flies apart: every contact above mass `k` is open and no neighbours there approach (their
@@ -51,7 +51,8 @@ def _cascade_over(t, ys, args, x, v, d, dd, closed):
 
     `args = (stack, scale, T, v0s)`, `v0s` the scaled initial velocities (contact has happened once a
     velocity departs from free flight); `x`, `v` (SI), the overlaps `d`, their rates `dd` and the closed
-    contacts `closed` of the state `ys`, which the caller (`_Contacts.update`) has at hand."""
+    contacts `closed` of the state `ys`, which the caller (`_Contacts.update`) has at hand, and the
+    memory block `q` of a law with memory (`Stack.memory`)."""
     stack, scale, T, v0s = args
     n = stack.n
     mask = stack.interface_mask()
@@ -59,7 +60,7 @@ def _cascade_over(t, ys, args, x, v, d, dd, closed):
     touched = jnp.any(jnp.abs(ys[n : 2 * n] - free_fall) > _TOUCHED)
     # per interface: open and not approaching, or quiet (its relative kinetic and elastic energy below
     # `_QUIET` of its drop energy: a clump of masses moving as one body), or absent
-    mu, m, pot = stack.effective_masses(), stack.masses, stack.potentials(d)
+    mu, m, pot = stack.effective_masses(), stack.masses, stack.potentials(d, q)
     touching = d > -jnp.sqrt(_QUIET) * scale[0]  # in contact, or within 1e-6 of the length scale
     quiet = touching & (0.5 * mu * dd**2 + pot <= _QUIET * 0.5 * mu * scale[n] ** 2)
     # Between two free masses (and mass 1 and the ground) an approach slower than sqrt(_QUIET) V is
@@ -93,7 +94,7 @@ def _cascade_over(t, ys, args, x, v, d, dd, closed):
     return touched & ((apart[0] & free) | bound)
 
 
-def _top_final(v, d, closed, stack, touched_top):
+def _top_final(v, d, closed, stack, touched_top, q=None):
     """Without gravity, the top mass's launch is final (`until="launch"`): it has been pushed, its
     contact is open and not closing, and no motion of the masses below can ever catch it. With the ground
     their mechanical energy `E` (kinetic plus their contacts' elastic energy; the ground does no work,
@@ -102,7 +103,7 @@ def _top_final(v, d, closed, stack, touched_top):
     (as in `_cascade_over`). Mass n moving faster than that cap is never pushed again, whatever happens
     below (the lower masses may go on colliding, as a gapped stack without gravity does for seconds)."""
     n, m = stack.n, stack.masses
-    pot = stack.potentials(d)
+    pot = stack.potentials(d, q)
     below = jnp.arange(n) < n - 1
     if stack.ground:
         energy = jnp.sum(jnp.where(below, 0.5 * m * v**2 + pot, 0.0))
@@ -126,9 +127,9 @@ class _Contacts(eqx.Module):
     that launch velocities and the energy audit need no step history (a history of `max_steps` rows is
     the dominant cost of a vmapped solve, where every step selects over the whole buffer).
 
-    `rows (n, 6)`: per interface, the latest accepted point in contact (scaled time, -1 if never) and the
+    `rows (n, 7)`: per interface, the latest accepted point in contact (scaled time, -1 if never) and the
     first accepted point after it (scaled time, SI overlap, overlap rate, and the velocities of the lower
-    and upper body, 0 for the ground); `now (n,)`: in contact at the latest point; `cascade (n + 5,)`:
+    and upper body, 0 for the ground, and the memory `q` of a law with memory, else 0); `now (n,)`: in contact at the latest point; `cascade (n + 5,)`:
     `[over, rebounds, t_c, top_done, v_top, v_c...]`: whether the first cascade is over (`_cascade_over` held
     at an accepted point; `rows` and `now` are then frozen), whether any contact closed after that, its
     scaled time `t_c`, whether the top mass has passed the apex of its flight after its last push (the
@@ -149,12 +150,13 @@ class _Contacts(eqx.Module):
         n = stack.n
         y = ys[: scale.shape[0]] * scale
         x, v, _ = stack.split(y)
+        q = stack.memory(y)
         d, dd = stack.overlaps(x), stack.overlap_rates(v)
-        active = stack.in_contact(d, dd) & stack.interface_mask()
+        active = stack.in_contact(d, dd, q) & stack.interface_mask()
         e = stack.total_energy(y) if audit else None
         v_top = ys[2 * n - 1]
         if c is None:
-            c = _Contacts(jnp.broadcast_to(jnp.asarray([-1.0, 0.0, 0.0, 0.0, 0.0, 0.0]), d.shape + (6,)),
+            c = _Contacts(jnp.broadcast_to(jnp.asarray([-1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]), d.shape + (7,)),
                           active & False, jnp.concatenate([jnp.zeros(4), v_top[None], ys[n : 2 * n]]),
                           None if e is None else (e, 0.0 * e))
         was_over, top_done = c.cascade[0] > 0, c.cascade[3] > 0
@@ -162,12 +164,13 @@ class _Contacts(eqx.Module):
         left = c.now & ~active
         t = jnp.broadcast_to(t, d.shape).astype(d.dtype)
         v_lo = jnp.concatenate([jnp.zeros(1, v.dtype), v[:-1]])
-        rows = jnp.where(jnp.stack([active] + [left] * 5, axis=-1) & ~frozen[:, None],
-                         jnp.stack([t, t, d, dd, v_lo, v], axis=-1), c.rows)
+        q_now = jnp.zeros_like(d) if q is None else q
+        rows = jnp.where(jnp.stack([active] + [left] * 6, axis=-1) & ~frozen[:, None],
+                         jnp.stack([t, t, d, dd, v_lo, v, q_now], axis=-1), c.rows)
         now = jnp.where(frozen, c.now, active)
-        over = _cascade_over(t[0], ys, args, x, v, d, dd, active)
+        over = _cascade_over(t[0], ys, args, x, v, d, dd, active, q)
         if launch and n >= 2:  # `until="launch"`: or as soon as the top mass's launch is final
-            over = over | _top_final(v, d, active, stack, rows[n - 1, 0] >= 0)
+            over = over | _top_final(v, d, active, stack, rows[n - 1, 0] >= 0, q)
         over = over & ~was_over
         # the top mass's apex: free, pushed before, its velocity turned from up to down
         apex = ~active[n - 1] & (rows[n - 1, 0] >= 0) & (c.cascade[4] > 0) & (v_top <= 0)
@@ -256,11 +259,12 @@ def _end_of_contacts(stack: Stack, c: _Contacts, time_scale, t_final):
     t_k = jnp.where(ended, c.rows[:, 0] * time_scale, 0.0)
     t_r = jnp.where(ended, c.rows[:, 1] * time_scale, 0.0)
     d_r, dd_r = jnp.where(ended, c.rows[:, 2], 0.0), jnp.where(ended, c.rows[:, 3], 0.0)
+    q_r = c.rows[:, 6] if stack.has_memory else None  # the memory after the contact (constant while open)
     curv = jnp.where((cols == 0) & stack.ground, stack.gravity, 0.0)  # ground: delta_0 = -x_1 is a parabola
     lo0 = jnp.where(ended, t_k - t_r, -1.0)
 
     def sep(s, d_r, dd_r, curv):
-        return stack.separation_function(d_r + dd_r * s + 0.5 * curv * s**2, dd_r + curv * s)
+        return stack.separation_function(d_r + dd_r * s + 0.5 * curv * s**2, dd_r + curv * s, q_r)
 
     frozen = jax.lax.stop_gradient((d_r, dd_r, curv, lo0))
 

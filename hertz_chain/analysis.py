@@ -173,7 +173,12 @@ def _rigid_comparison(sol, e_meas, e_nom, v_ref) -> RigidComparison:
     nominal = None
     if e_nom is not None:
         e_nom = np.asarray(e_nom, dtype=float)
-        nominal = safe(lambda: closed_form(e_nom), "nominal")
+        if not np.isfinite(e_nom[first:]).all():
+            notes.append("nominal: no nominal restitution for interface(s) "
+                         f"{[j for j in range(first, n) if not np.isfinite(e_nom[j])]} (a speed-dependent law "
+                         "given by its raw parameter, or an elastic–plastic law)")
+        else:
+            nominal = safe(lambda: closed_form(e_nom), "nominal")
         if nominal is None and not notes:
             notes.append("nominal: Eqs 13/19 need a dropped stack (or a struck chain at rest)")
     measured = event = None
@@ -264,7 +269,7 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     closed = np.where(clamped, st.forces > 0, st.overlaps > 0)
     every = contact_episodes(st.t, st.overlaps, st.overlap_rates, st.forces, accelerations=dd_acc,
                              interfaces=interfaces, free_at_end=sol.status.ok, noise_floor=floor,
-                             closed=closed, separation=_separation(stack))
+                             closed=closed, separation=_separation(stack, st.max_overlaps))
     # an episode that starts after its interface's last contact of the first cascade is a rebound
     last_end = np.asarray(sol.contact_end_times, dtype=float)
     first = [ep for ep in every if np.isfinite(last_end[ep.interface]) and ep.start < last_end[ep.interface]]
@@ -352,15 +357,17 @@ def _warnings(sol, e_meas, e_nom, regime, tolerances) -> list[str]:
     return out
 
 
-def _separation(stack):
-    """`separation(j, delta, delta_dot)` for `contact_episodes`: `Stack.separation_function` of
-    interface `j` on arrays of samples (one JAX call each)."""
+def _separation(stack, memory=None):
+    """`separation(j, delta, delta_dot, k)` for `contact_episodes`: `Stack.separation_function` of
+    interface `j` on arrays of samples (one JAX call each), with the memory `q` of sample `k` (a law with
+    memory; `memory` the trajectory's `max_overlaps`)."""
     n = stack.n
 
-    def fn(j, delta, rate):
+    def fn(j, delta, rate, k=None):
         d = np.zeros((np.size(delta), n))
         r = np.zeros((np.size(delta), n))
         d[:, j], r[:, j] = delta, rate
-        return np.asarray(stack.separation_function(d, r))[:, j]
+        q = None if memory is None or k is None else np.broadcast_to(np.asarray(memory)[k], d.shape)
+        return np.asarray(stack.separation_function(d, r, q))[:, j]
 
     return fn

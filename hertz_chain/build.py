@@ -28,7 +28,7 @@ import numpy as np
 
 from .contact import AbstractContactLaw, make_law
 from .errors import ParameterError, StackFileError
-from .materials import Material, contact_stiffness, material as lookup_material
+from .materials import Material, contact_stiffness, effective_radius, material as lookup_material
 from .registry import LAWS
 from .rigid import cascade_velocities, met_design, met_mass_ratio, mvg_design
 from .simulate import Tolerances
@@ -118,10 +118,26 @@ def _section(spec: StackSpec, cs: ContactSpec, j: int):
                              f"(interface {j}): {exc}") from exc
 
 
-def _law(cs: ContactSpec, stiffness: float, m_eff: float, v_c: float | None) -> AbstractContactLaw:
+def _effective_radius(spec: StackSpec, cs: ContactSpec, j: int, n: int) -> float:
+    """The interface's effective radius R* (m) from `stack.radius` (and `ground.radius`), for a law that
+    needs it (`registry.LawRow.needs_radius`: the elastic–plastic laws)."""
+    radii = spec.stack.radius_list(n)
+    if radii is None:
+        raise StackFileError(f"{spec.source + ': ' if spec.source else ''}stack.radius: missing; law "
+                             f"{cs.law!r} ({cs.source}) needs the contact radius of interface {j}")
+    r = (spec.ground.radius, radii[0]) if j == 0 else (radii[j - 1], radii[j])
+    if math.isinf(r[0]) and math.isinf(r[1]):
+        raise StackFileError(f"{cs.source}: interface {j} is flat on flat; law {cs.law!r} needs a curved "
+                             "surface (give a finite stack.radius)")
+    R1, R2 = (r[1], r[0]) if math.isinf(r[0]) else r
+    return effective_radius(R1, None if math.isinf(R2) else R2)
+
+
+def _law(cs: ContactSpec, stiffness: float, m_eff: float, v_c: float | None,
+         radius: float | None = None) -> AbstractContactLaw:
     return make_law(cs.law, stiffness=stiffness, restitution=cs.restitution, effective_mass=m_eff,
                     calibration_velocity=v_c, chi_map=cs.chi_map, alpha=cs.alpha, damping=cs.damping,
-                    clamp=cs.clamp)
+                    clamp=cs.clamp, effective_radius=radius, **dict(cs.params))
 
 
 def _nominal_e(cs: ContactSpec, stiffness: float, m_eff: float) -> float:
@@ -129,6 +145,8 @@ def _nominal_e(cs: ContactSpec, stiffness: float, m_eff: float) -> float:
     damping parameter gives (the law's own `restitution_at`) when that does not depend on the impact
     speed (`registry.LawRow.speed_dependent`), NaN otherwise."""
     row = LAWS[cs.law]
+    if row.memory:  # elastic–plastic: e follows from the impact speed (the law's `restitution_at`)
+        return math.nan
     if row.elastic:
         return 1.0
     if cs.restitution is not None:
@@ -186,8 +204,9 @@ def _build(spec: StackSpec) -> Built:
             if not (np.isfinite(v_c) and v_c > 0):
                 raise StackFileError(f"{cs.source}.calibration_velocity: the rigid model predicts no "
                                      f"impact at interface {j}; give a calibration_velocity")
+        radius = _effective_radius(spec, cs, j, n) if LAWS[cs.law].needs_radius else None
         with _section(spec, cs, j):
-            laws[j] = _law(cs, stiffness[j], float(m_eff[j]), v_c)
+            laws[j] = _law(cs, stiffness[j], float(m_eff[j]), v_c, radius)
     stack = Stack(m, [laws[j] for j in interfaces], gravity=g, ground=ground)
     bodies = spec.stack
     if bodies.velocities is not None:

@@ -28,6 +28,7 @@ import math
 from typing import ClassVar
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike
@@ -44,6 +45,7 @@ __all__ = [
     "Tsuji",
     "KelvinVoigt",
     "Viscoelastic",
+    "Thornton",
     "LAW_NAMES",
     "make_law",
 ]
@@ -65,6 +67,10 @@ class AbstractContactLaw(eqx.Module):
 
     clamp: eqx.AbstractVar[bool]
     name: ClassVar[str] = ""
+    has_memory: ClassVar[bool] = False
+    """A law with memory (elastic–plastic) keeps one internal variable per interface, its largest overlap
+    so far `q`, in the ODE state; its `force`, `elastic_force` and `potential` take `q` as a third
+    argument, and it defines `memory_rate` and `dissipated_power` (`Thornton`)."""
 
     @abc.abstractmethod
     def elastic_force(self, delta: ArrayLike) -> Array:
@@ -84,6 +90,20 @@ class AbstractContactLaw(eqx.Module):
         if self.clamp:
             f = jnp.maximum(f, 0.0)
         return f
+
+    def dissipated_power(self, delta: ArrayLike, delta_dot: ArrayLike) -> Array:
+        """Power dissipated by the contact (W): ``(force - elastic_force) delta_dot``."""
+        return (self.force(delta, delta_dot) - self.elastic_force(delta)) * delta_dot
+
+    def separation(self, delta: ArrayLike, delta_dot: ArrayLike) -> Array:
+        """A function ``> 0`` exactly while the contact pushes, ``<= 0`` once it is open
+        (`Stack.separation_function`): the unclamped force over the secant stiffness with the clamp,
+        the overlap without it."""
+        delta = jnp.asarray(delta, dtype=float)
+        el = self.elastic_force(delta)
+        fu = el + self.damping_force(delta, delta_dot)
+        ok = (delta > 0) & (el > 0) & self.clamp
+        return jnp.where(ok, fu * delta / jnp.where(ok, el, 1.0), delta)
 
     @classmethod
     def dimensionless_damping(cls, restitution: float, *, chi_map: str = "exact", clamp: bool = True) -> float:
@@ -429,6 +449,137 @@ class Viscoelastic(_HertzianElastic):
         return jnp.where(mask, 1.5 * self.k * self.A * jnp.sqrt(d) * delta_dot, 0.0)
 
 
+class Thornton(AbstractContactLaw):
+    """Elastic–perfectly plastic contact of Thornton (1997), "Coefficient of restitution for collinear
+    collisions of elastic-perfectly plastic spheres", J. Appl. Mech. 64, 383.
+
+    - **Loading**, while the overlap ``delta`` is the largest so far: Hertz, ``F = k delta^{3/2}``, up to
+      the yield overlap ``delta_y``, where the peak contact pressure reaches the limiting pressure ``p_y``
+      (``delta_y = R (pi p_y / (2 E*))^2``); beyond it the linear plastic branch
+      ``F = F_y + pi p_y R (delta - delta_y)`` with ``F_y = k delta_y^{3/2}``. With ``k = (4/3) E* sqrt(R)``
+      its slope is ``pi p_y R = (3/2) k sqrt(delta_y)``, so the law depends on ``k`` and ``delta_y`` only.
+    - **Unloading** from the largest overlap ``delta*`` (force ``F*``): elastic Hertz with the enlarged
+      radius ``R_p = 4 E* a_p^3 / (3 F*)``, ``a_p^2 = R delta*`` (Thornton's ``(2F* + F_y)/(2 pi p_y)``),
+      about the permanent overlap ``delta_p = delta* - a_p^2 / R_p``: ``F = k_u (delta - delta_p)^{3/2}``
+      with ``k_u = k sqrt(R_p / R) = k sqrt(k delta*^{3/2} / F*)`` and ``delta_p = delta* - F* / (k
+      sqrt(delta*))``. Reloading follows the unloading curve up to ``delta*``, then the plastic branch.
+
+    **Memory.** ``q``, the largest overlap so far (m), is carried in the ODE state, one per interface, with
+    ``dq/dt = max(delta_dot, 0)`` while ``delta >= q`` (0 otherwise); the force uses ``max(q, delta)``, so a
+    lagging ``q`` never puts a loading contact on its unloading curve. The dissipated (plastic) power is
+    ``-dU/ddelta* · d(delta*)/dt``, ``U`` the recoverable energy ``(2/5) k_u (delta - delta_p)^{5/2}``, so
+    the energy audit closes.
+
+    **Restitution** (`restitution_at`, exact for this law): ``e = 1`` up to the yield velocity
+    ``V_y = sqrt(4 k delta_y^{5/2} / (5 m*))`` (Johnson 1985, Contact Mechanics, Section 11.3:
+    ``rho V_y^2 / Y = 26 (Y/E*)^4`` for a sphere on a flat with ``p_y = 1.6 Y``), and above it Thornton's
+    closed form ``e = sqrt(6 sqrt(3)/5) sqrt(1 - r^2/6) [r / (r + 2 sqrt(6/5 - r^2/5))]^{1/4}``,
+    ``r = V_y / V_i``.
+
+    **Arguments:** ``k`` (N/m^1.5), ``delta_y`` (m); `from_yield_pressure` takes ``p_y`` and the effective
+    radius ``R`` instead. The force is never tensile (``clamp`` has no effect; kept for the common API).
+    """
+
+    name: ClassVar[str] = "thornton"
+    has_memory: ClassVar[bool] = True
+    k: Array
+    delta_y: Array
+    clamp: bool = eqx.field(static=True, default=True)
+
+    def __init__(self, k: ArrayLike, delta_y: ArrayLike, clamp: bool = True):
+        self.k = jnp.asarray(k, dtype=float)
+        self.delta_y = jnp.asarray(delta_y, dtype=float)
+        self.clamp = clamp
+
+    @classmethod
+    def from_yield_pressure(cls, k, yield_pressure, effective_radius, clamp: bool = True) -> "Thornton":
+        """``delta_y = R (pi p_y / (2 E*))^2`` with ``E* = 3 k / (4 sqrt(R))`` (Hertz)."""
+        k, p_y = _stiffness(k), _positive(yield_pressure, "yield_pressure")
+        R = _positive(effective_radius, "effective_radius")
+        e_star = 0.75 * k / math.sqrt(R)
+        return cls(k, R * (math.pi * p_y / (2.0 * e_star)) ** 2, clamp)
+
+    @classmethod
+    def from_config(cls, k, *, restitution=None, damping=None, effective_mass=None, calibration_velocity=None,
+                    chi_map="exact", clamp=True, yield_pressure=None, effective_radius=None) -> "Thornton":
+        """`make_law`'s constructor: ``yield_pressure`` (Pa) and the interface's ``effective_radius`` (m)."""
+        if restitution is not None:
+            raise ParameterError("restitution", restitution, "not a parameter of 'thornton': its restitution "
+                                 "follows from yield_pressure and the impact speed")
+        p_y = _require(yield_pressure, "yield_pressure", cls.name)
+        R = _require(effective_radius, "effective_radius (stack.radius)", cls.name)
+        return cls.from_yield_pressure(k, p_y, R, clamp)
+
+    def _unloading(self, peak):
+        """``(k_u, delta_p)`` of the unloading curve from the largest overlap ``peak``."""
+        mask, dm = _positive_part(peak)
+        dy = self.delta_y
+        sdy, sdm = jnp.sqrt(dy), jnp.sqrt(dm)
+        plastic = mask & (dm > dy)
+        fstar = jnp.where(plastic, self.k * dy * sdy + 1.5 * self.k * sdy * (dm - dy), self.k * dm * sdm)
+        k_u = jnp.where(plastic, self.k * jnp.sqrt(self.k * dm * sdm / fstar), self.k)
+        delta_p = jnp.where(plastic, dm - fstar / (self.k * sdm), 0.0)
+        return k_u, delta_p
+
+    def _peak(self, delta, q):
+        delta = jnp.asarray(delta, dtype=float)
+        return delta if q is None else jnp.maximum(q, delta)
+
+    def elastic_force(self, delta: ArrayLike, q: ArrayLike | None = None) -> Array:
+        """The force: on the loading curve while ``delta >= q``, else on the unloading curve."""
+        k_u, dp = self._unloading(self._peak(delta, q))
+        mask, s = _positive_part(jnp.asarray(delta, dtype=float) - dp)
+        return jnp.where(mask, k_u * s * jnp.sqrt(s), 0.0)
+
+    def _energy(self, delta, peak):
+        k_u, dp = self._unloading(peak)
+        mask, s = _positive_part(jnp.asarray(delta, dtype=float) - dp)
+        return jnp.where(mask, 0.4 * k_u * s * s * jnp.sqrt(s), 0.0)
+
+    def potential(self, delta: ArrayLike, q: ArrayLike | None = None) -> Array:
+        """Recoverable elastic energy ``(2/5) k_u (delta - delta_p)^{5/2}`` (J)."""
+        return self._energy(delta, self._peak(delta, q))
+
+    def force(self, delta: ArrayLike, delta_dot: ArrayLike, q: ArrayLike | None = None) -> Array:
+        return self.elastic_force(delta, q)
+
+    def memory_rate(self, delta: ArrayLike, delta_dot: ArrayLike, q: ArrayLike) -> Array:
+        """``dq/dt``: the overlap rate while loading (``delta >= q``, approaching), else 0."""
+        delta = jnp.asarray(delta, dtype=float)
+        return jnp.where((delta > 0) & (delta >= q), jnp.maximum(delta_dot, 0.0), 0.0)
+
+    def dissipated_power(self, delta: ArrayLike, delta_dot: ArrayLike, q: ArrayLike | None = None) -> Array:
+        """Plastic power ``-dU/ddelta* · d(delta*)/dt`` (W), ``delta* = max(q, delta)``."""
+        delta = jnp.asarray(delta, dtype=float)
+        q = jnp.zeros_like(delta) if q is None else q
+        peak = jnp.maximum(q, delta)
+        rate = jnp.where(delta > q, delta_dot, self.memory_rate(delta, delta_dot, q))
+        # through the peak only (not `potential`, whose max(q, delta) would share the derivative at a tie)
+        _, dU = jax.jvp(lambda p: self._energy(delta, p), (peak,), (rate,))
+        return -dU
+
+    def separation(self, delta: ArrayLike, delta_dot: ArrayLike, q: ArrayLike | None = None) -> Array:
+        """``delta - delta_p``: the contact is open once the overlap is back at the permanent one."""
+        _, dp = self._unloading(self._peak(delta, q))
+        return jnp.asarray(delta, dtype=float) - dp
+
+    def yield_velocity(self, effective_mass: ArrayLike):
+        """Johnson's yield velocity ``V_y = sqrt(4 k delta_y^{5/2} / (5 m*))`` (m/s): the impact speed at
+        which the loading reaches ``delta_y``."""
+        m = np.asarray(effective_mass, dtype=float)
+        k, dy = np.asarray(self.k, dtype=float), np.asarray(self.delta_y, dtype=float)
+        return _scalar(np.sqrt(0.8 * k * dy**2.5 / m))
+
+    def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
+        """Thornton's closed form (class docstring); 1 at or below the yield velocity."""
+        v = _velocity(impact_velocity)
+        m = _positive(_require(effective_mass, "effective_mass", self.name), "effective_mass")
+        r = np.minimum(np.asarray(self.yield_velocity(m)) / v, 1.0)
+        e = (math.sqrt(6 * math.sqrt(3) / 5) * np.sqrt(1 - r**2 / 6)
+             * (r / (r + 2 * np.sqrt(6 / 5 - r**2 / 5))) ** 0.25)
+        return _scalar(np.where(r >= 1.0, 1.0, e))
+
+
 # --------------------------------------------------------------------------------------------------
 # validation helpers (concrete values only) and the factory used by the stack-file reader
 
@@ -494,6 +645,8 @@ def make_law(
     damping: float | None = None,
     A: float | None = None,
     clamp: bool = True,
+    yield_pressure: float | None = None,
+    effective_radius: float | None = None,
 ) -> AbstractContactLaw:
     """Build a contact law from its configuration name (the one factory of the stack-file reader).
 
@@ -511,6 +664,7 @@ def make_law(
       | ``tsuji`` | ``eta`` or ``damping`` (= eta) | ``effective_mass`` (always needed) |
       | ``kelvin-voigt`` | ``damping`` (= c, N s/m) | ``effective_mass`` |
       | ``viscoelastic`` | ``A`` or ``damping`` (= A, s) | ``effective_mass``, ``calibration_velocity`` |
+      | ``thornton`` | ``yield_pressure`` (Pa) and ``effective_radius`` (m); no ``restitution`` | — |
 
       ``e`` is reproduced exactly (to ~1e-11) in the isolated impact, with or without the clamp
       (see `hertz_chain.calibration`); for ``hunt-crossley`` and ``viscoelastic`` only at the
@@ -551,9 +705,18 @@ def make_law(
     if e is not None and own_given:
         raise ParameterError(own_given[0][0], own_given[0][1],
                              "give either restitution or the law's own damping parameter, not both")
-    if not row.elastic and e is None and not own_given:
+    extra = {"yield_pressure": yield_pressure, "effective_radius": effective_radius}
+    wanted = {key for key, _ in row.params} | ({"effective_radius"} if row.needs_radius else set())
+    for key, value in extra.items():
+        if value is not None and key not in wanted and key != "effective_radius":
+            raise ParameterError(key, value, f"not a parameter of the {law!r} law")
+    if row.memory and e is not None:
+        raise ParameterError("restitution", restitution, f"not a parameter of the {law!r} law: its restitution "
+                             "follows from its own parameters and the impact speed")
+    if row.damping is not None and e is None and not own_given:
         raise ParameterError("restitution", None, f"the {law!r} law needs restitution or {' / '.join(own)}")
     param = _nonnegative(own_given[0][1], own_given[0][0]) if own_given else None
+    kwargs = {key: extra[key] for key in wanted}
     return _LAW_CLASSES[law].from_config(k, restitution=e, damping=param, effective_mass=effective_mass,
                                          calibration_velocity=calibration_velocity, chi_map=chi_map,
-                                         clamp=clamp)
+                                         clamp=clamp, **kwargs)

@@ -181,8 +181,8 @@ def contact_episodes(
       and are dropped (touching masses in float64 overlap by ~1e-24 m).
     - `closed`: optional ``(T, n_if)`` booleans, the contact pushes at each sample (force > 0 for a
       clamped law); default ``overlaps > 0``.
-    - `separation`: optional ``separation(j, delta, delta_dot) -> G`` (arrays), ``> 0`` exactly while
-      interface ``j`` pushes (`Stack.separation_function`). With `accelerations`, every end is located
+    - `separation`: optional ``separation(j, delta, delta_dot, k) -> G`` (arrays; ``k`` the sample the
+      end is extrapolated from), ``> 0`` exactly while interface ``j`` pushes (`Stack.separation_function`). With `accelerations`, every end is located
       where ``G`` returns to zero along the free flight after it: the force's return to zero.
 
     **Returns** the episodes sorted by start time.
@@ -233,7 +233,7 @@ def contact_episodes(
                 hit = None
                 if accelerations is not None and separation is not None:
                     hit = _free_side_release(t[k], d[k, j], r[k, j], accelerations[k, j], t[i1],
-                                             lambda dd_, rr_, j=j: separation(j, dd_, rr_))
+                                             lambda dd_, rr_, j=j, k=k: separation(j, dd_, rr_, k))
                 if hit is None and accelerations is not None:
                     hit = _free_side_crossing(t[k], d[k, j], r[k, j], accelerations[k, j], t[i1])
                 t_end, v_out = hit or _crossing(t[i1], t[k], d[i1, j], d[k, j], r[i1, j], r[k, j])

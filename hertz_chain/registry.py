@@ -41,6 +41,11 @@ class LawRow:
     - `speed_dependent`: its restitution changes with the impact speed, so calibrating it to a
       restitution needs a `calibration_velocity`; `needs_effective_mass`: calibrating it (or the law
       itself) needs the interface's effective mass; `chi_map`: it takes a `CHI_MAPS` entry.
+    - `memory`: the law keeps an internal variable per interface in the ODE state (elastic–plastic: the
+      largest overlap so far); its restitution follows from its own parameters and the impact speed, so
+      it takes no `restitution`. `params`: the further stack-file keys it needs, as `(key, dimension)`
+      (a `stackfile` dimension name), passed to its `from_config` by name; `needs_radius`: it needs the
+      interface's effective radius (from `stack.radius`), passed as `effective_radius`.
     """
 
     name: str
@@ -55,6 +60,9 @@ class LawRow:
     needs_effective_mass: bool = False
     chi_map: bool = False
     smooth_onset: bool = False
+    memory: bool = False
+    params: tuple[tuple[str, str], ...] = ()
+    needs_radius: bool = False
 
     @property
     def hertzian(self) -> bool:
@@ -63,7 +71,8 @@ class LawRow:
 
     @property
     def elastic(self) -> bool:
-        return self.damping is None
+        """Its restitution is 1 (no damping, no plasticity)."""
+        return self.damping is None and not self.memory
 
     @property
     def keywords(self) -> tuple[str, ...]:
@@ -72,8 +81,8 @@ class LawRow:
 
     def file_keys(self) -> frozenset[str]:
         """The keys a stack-file contact section with this law may hold (besides `law`)."""
-        keys = {"stiffness", "clamp"}
-        if not self.elastic:
+        keys = {"stiffness", "clamp"} | {key for key, _ in self.params}
+        if self.damping is not None:
             keys |= {"restitution", self.damping}
         if self.chi_map:
             keys.add("chi_map")
@@ -83,6 +92,8 @@ class LawRow:
 
     def hint(self) -> str:
         """What it takes, for error messages."""
+        if self.memory:
+            return f"the {self.name!r} law takes {', '.join(k for k, _ in self.params)} (no restitution)"
         if self.elastic:
             return f"the {self.name!r} law is elastic (no damping)"
         extra = " with chi_map" if self.chi_map else (" (with calibration_velocity)" if self.speed_dependent else "")
@@ -101,6 +112,7 @@ LAWS: dict[str, LawRow] = {row.name: row for row in (
            needs_effective_mass=True),
     LawRow("viscoelastic", "Viscoelastic", damping="damping", damping_dimension="time", damping_max=1.0,
            damping_label="A, s", aliases=("A",), speed_dependent=True, needs_effective_mass=True),
+    LawRow("thornton", "Thornton", memory=True, params=(("yield_pressure", "pressure"),), needs_radius=True),
 )}
 """Contact laws by configuration name (see `LawRow`)."""
 

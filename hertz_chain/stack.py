@@ -197,19 +197,42 @@ class Stack(eqx.Module):
         raise ParameterError("interface", j, f"one of {self.interfaces}")
 
     # ---------------------------------------------------------------- per-interface evaluation
-    def _map_laws(self, fn, *args: Array) -> Array:
-        """Apply `fn(law, *args_of_its_interfaces)` group-wise; zero on missing interfaces."""
+    @property
+    def has_memory(self) -> bool:
+        """Some law keeps an internal variable per interface (`AbstractContactLaw.has_memory`): the state
+        is then `[x, v, D, q]` (`4n`), `q` the largest overlap of every interface so far."""
+        return any(type(law).has_memory for law in self.laws)
+
+    @property
+    def state_size(self) -> int:
+        """Length of the flat SI state: `3n` (`[x, v, D]`), `4n` with a law with memory (`[x, v, D, q]`)."""
+        return (4 if self.has_memory else 3) * self.n
+
+    def memory(self, y: Array) -> Array | None:
+        """`(..., n)` the memory block `q` of a flat state (largest overlaps, m), None without memory laws."""
+        n = self.n
+        return y[..., 3 * n : 4 * n] if self.has_memory else None
+
+    def initial_vector(self, state: "State") -> Array:
+        """The flat SI state `[x, v, D = 0 (, q = 0)]` of `state` (`state_size` entries)."""
+        y = state.flat()
+        return jnp.concatenate([y, jnp.zeros(y.shape[:-1] + (self.n,))], axis=-1) if self.has_memory else y
+
+    def _map_laws(self, fn, *args: Array, q: Array | None = None) -> Array:
+        """Apply `fn(law, *args_of_its_interfaces, q_of_its_interfaces)` group-wise (`q` is None for a law
+        without memory, or when no `q` is given); zero on missing interfaces."""
         n = self.n
         out = jnp.zeros(jnp.shape(args[0]), dtype=float)
         for idx, law in zip(self.groups, self.laws):
+            mem = type(law).has_memory and q is not None
             if idx == tuple(range(n)):
-                return fn(law, *args)
+                return fn(law, *args, q if mem else None)
             start, stop = idx[0], idx[-1] + 1
             if idx == tuple(range(start, stop)):  # contiguous: a slice
-                out = out.at[..., start:stop].set(fn(law, *(a[..., start:stop] for a in args)))
+                sl = slice(start, stop)
             else:
-                ia = np.asarray(idx)
-                out = out.at[..., ia].set(fn(law, *(a[..., ia] for a in args)))
+                sl = np.asarray(idx)
+            out = out.at[..., sl].set(fn(law, *(a[..., sl] for a in args), q[..., sl] if mem else None))
         return out
 
     def overlaps(self, x: Array) -> Array:
@@ -221,41 +244,56 @@ class Stack(eqx.Module):
         """`(..., n)` overlap rates `delta_dot` (> 0 while approaching)."""
         return self.overlaps(v)
 
-    def forces(self, delta: Array, delta_dot: Array) -> Array:
+    # `q` (the memory block, `memory`) reaches the laws with memory only; without it they behave as on
+    # their first loading.
+    def forces(self, delta: Array, delta_dot: Array, q: Array | None = None) -> Array:
         """`(..., n)` contact force of every interface (N, >= 0 pushes apart)."""
-        return self._map_laws(lambda law, d, dd: law.force(d, dd), delta, delta_dot)
+        return self._map_laws(lambda law, d, dd, m: law.force(d, dd) if m is None else law.force(d, dd, m),
+                              delta, delta_dot, q=q)
 
-    def elastic_forces(self, delta: Array) -> Array:
+    def elastic_forces(self, delta: Array, q: Array | None = None) -> Array:
         """`(..., n)` conservative part of every contact force (N)."""
-        return self._map_laws(lambda law, d: law.elastic_force(d), delta)
+        return self._map_laws(lambda law, d, m: law.elastic_force(d) if m is None else law.elastic_force(d, m),
+                              delta, q=q)
 
-    def unclamped_forces(self, delta: Array, delta_dot: Array) -> Array:
+    def unclamped_forces(self, delta: Array, delta_dot: Array, q: Array | None = None) -> Array:
         """`(..., n)` `elastic_force + damping_force`, without the no-tension clamp (N)."""
+        return self.elastic_forces(delta, q) + self._map_laws(
+            lambda law, d, dd, m: law.damping_force(d, dd), delta, delta_dot)
+
+    def potentials(self, delta: Array, q: Array | None = None) -> Array:
+        """`(..., n)` elastic (recoverable) energy stored in every contact (J)."""
+        return self._map_laws(lambda law, d, m: law.potential(d) if m is None else law.potential(d, m),
+                              delta, q=q)
+
+    def dissipated_powers(self, delta: Array, delta_dot: Array, q: Array | None = None) -> Array:
+        """`(..., n)` power dissipated by every contact (W; `AbstractContactLaw.dissipated_power`)."""
         return self._map_laws(
-            lambda law, d, dd: law.elastic_force(d) + law.damping_force(d, dd), delta, delta_dot
-        )
+            lambda law, d, dd, m: law.dissipated_power(d, dd) if m is None else law.dissipated_power(d, dd, m),
+            delta, delta_dot, q=q)
 
-    def potentials(self, delta: Array) -> Array:
-        """`(..., n)` elastic energy stored in every contact (J)."""
-        return self._map_laws(lambda law, d: law.potential(d), delta)
+    def memory_rates(self, delta: Array, delta_dot: Array, q: Array) -> Array:
+        """`(..., n)` `dq/dt` of the memory block (0 on interfaces whose law has no memory)."""
+        return self._map_laws(lambda law, d, dd, m: jnp.zeros_like(d) if m is None else law.memory_rate(d, dd, m),
+                              delta, delta_dot, q=q)
 
-    def separation_function(self, delta: Array, delta_dot: Array) -> Array:
+    def separation_function(self, delta: Array, delta_dot: Array, q: Array | None = None) -> Array:
         """`(..., n)` a function that is `> 0` exactly while a contact pushes, `<= 0` once it is open.
 
         `G = (F^el + F^damp) delta / F^el` for `delta > 0` (the unclamped force over the secant
         stiffness: a length, smooth through the force zero; `G = delta` for an elastic law), and
         `G = delta` otherwise. With the no-tension clamp the bodies separate at `G = 0` (force zero),
         possibly at `delta > 0`. Without it (`law.clamp=False`) the contact pulls until the overlap
-        closes, so `G = delta` on that interface. Used to locate the end of contacts.
+        closes, so `G = delta` on that interface. An elastic–plastic law: `G = delta - delta_p`, the
+        overlap above the permanent one (`AbstractContactLaw.separation`). Used to locate the end of
+        contacts.
         """
-        el = self.elastic_forces(delta)
-        fu = self.unclamped_forces(delta, delta_dot)
-        ok = (delta > 0) & (el > 0) & self.clamped()
-        return jnp.where(ok, fu * delta / jnp.where(ok, el, 1.0), delta)
+        return self._map_laws(lambda law, d, dd, m: law.separation(d, dd) if m is None else law.separation(d, dd, m),
+                              delta, delta_dot, q=q)
 
-    def in_contact(self, delta: Array, delta_dot: Array) -> Array:
+    def in_contact(self, delta: Array, delta_dot: Array, q: Array | None = None) -> Array:
         """`(..., n)` booleans: the contact is closed (force > 0 if clamped, `delta > 0` if not)."""
-        return jnp.where(self.clamped(), self.forces(delta, delta_dot) > 0, delta > 0)
+        return jnp.where(self.clamped(), self.forces(delta, delta_dot, q) > 0, delta > 0)
 
     def accelerations(self, forces: Array) -> Array:
         """`(..., n)` accelerations of the masses (m/s², upward) from the interface forces."""
@@ -264,22 +302,27 @@ class Stack(eqx.Module):
 
     # ---------------------------------------------------------------- dynamics
     def split(self, y: Array) -> tuple[Array, Array, Array]:
-        """Split a flat state `(..., 3n)` into positions, velocities and dissipated energies."""
+        """Split a flat state `(..., 3n)` (or `(..., 4n)`, `memory`) into positions, velocities and
+        dissipated energies."""
         n = self.n
-        return y[..., :n], y[..., n : 2 * n], y[..., 2 * n :]
+        return y[..., :n], y[..., n : 2 * n], y[..., 2 * n : 3 * n]
 
     def vector_field(self, t, y: Array, args=None) -> Array:
-        """`dy/dt` of the flat SI state `y = [x, v, D]` (diffrax signature `(t, y, args)`).
+        """`dy/dt` of the flat SI state `y = [x, v, D (, q)]` (diffrax signature `(t, y, args)`).
 
         `dx/dt = v`; `m_i dv_i/dt = F_{i-1,i} - F_{i,i+1} - m_i g` (Newton); `dD_j/dt = (F_j -
         F^el_j) delta_dot_j`, the power dissipated by the damping part of interface `j` (with the
-        no-tension clamp, `F_j = 0` while `F^el_j > 0` on separation, which also dissipates).
+        no-tension clamp, `F_j = 0` while `F^el_j > 0` on separation, which also dissipates); with a
+        law with memory, its own `dissipated_power` and `dq_j/dt = memory_rate` (`Thornton`).
         """
         x, v, _ = self.split(y)
+        q = self.memory(y)
         d, dd = self.overlaps(x), self.overlap_rates(v)
-        f = self.forces(d, dd)
-        p = (f - self.elastic_forces(d)) * dd
-        return jnp.concatenate([v, self.accelerations(f), p], axis=-1)
+        f = self.forces(d, dd, q)
+        if q is None:  # the common path: the damping part's power, from the forces at hand
+            return jnp.concatenate([v, self.accelerations(f), (f - self.elastic_forces(d)) * dd], axis=-1)
+        parts = [v, self.accelerations(f), self.dissipated_powers(d, dd, q), self.memory_rates(d, dd, q)]
+        return jnp.concatenate(parts, axis=-1)
 
     def energies(self, y: Array) -> dict[str, Array]:
         """Kinetic, gravitational (zero at `x = 0`), elastic and dissipated energy (J) of a state."""
@@ -287,7 +330,7 @@ class Stack(eqx.Module):
         return dict(
             kinetic=0.5 * jnp.sum(self.masses * v**2, axis=-1),
             gravitational=self.gravity * jnp.sum(self.masses * x, axis=-1),
-            elastic=jnp.sum(self.potentials(self.overlaps(x)), axis=-1),
+            elastic=jnp.sum(self.potentials(self.overlaps(x), self.memory(y)), axis=-1),
             dissipated=jnp.sum(diss, axis=-1),
         )
 
@@ -300,7 +343,7 @@ class Stack(eqx.Module):
         """
         x, v, diss = self.split(y)
         mech = self.masses * (0.5 * v**2 + self.gravity[..., None] * x)
-        return jnp.sum(jnp.concatenate([mech, self.potentials(self.overlaps(x)), diss], axis=-1),
+        return jnp.sum(jnp.concatenate([mech, self.potentials(self.overlaps(x), self.memory(y)), diss], axis=-1),
                        axis=-1)
 
 

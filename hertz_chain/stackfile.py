@@ -138,7 +138,7 @@ _CONTACT_KEYS = (
     "alpha",
     "damping",
     "clamp",
-)
+) + tuple(dict.fromkeys(key for row in LAWS.values() for key, _ in row.params))  # e.g. thornton's yield_pressure
 _SOLVER_KEYS = ("solver", "rtol", "atol", "t_max", "until", "max_steps", "n_output", "dt_output")
 #: `solver.until`: stop when the first cascade ends, or go on to `t_max` and report rebounds.
 UNTIL = ("cascade", "t_max", "launch")
@@ -291,6 +291,7 @@ class ContactSpec:
     damping: float | None = None
     clamp: bool = True
     source: str = "contact"
+    params: tuple[tuple[str, float], ...] = ()  # the law's further keys (`registry.LawRow.params`), in SI
 
 
 @dataclass(frozen=True)
@@ -685,8 +686,14 @@ def _resolve_contact(merged: dict, label: str, *, ground: bool) -> ContactSpec:
         raw, key = merged["calibration_velocity"]
         calibration_velocity = _positive(raw, key, "velocity")
     clamp = _bool(*merged["clamp"]) if "clamp" in merged else True
+    params = []
+    for pkey, dim in row.params:  # required further keys of the law, e.g. thornton's yield_pressure
+        if pkey not in merged:
+            raise _error(_join(label, pkey), f"missing; law {law!r} needs {pkey} ({_UNITS.get(dim, dim)})")
+        raw, key = merged[pkey]
+        params.append((pkey, _positive(raw, key, dim)))
 
-    if not row.elastic:
+    if row.damping is not None:
         given = [k for k in ("restitution", "alpha", "damping") if k in merged]
         options = f"restitution or {row.damping}"
         if not given:
@@ -706,7 +713,7 @@ def _resolve_contact(merged: dict, label: str, *, ground: bool) -> ContactSpec:
         elif row.chi_map and chi_map is None:
             chi_map = "exact"
     return ContactSpec(
-        law, stiffness, restitution, chi_map, calibration_velocity, alpha, damping, clamp, label
+        law, stiffness, restitution, chi_map, calibration_velocity, alpha, damping, clamp, label, tuple(params)
     )
 
 

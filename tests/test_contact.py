@@ -14,6 +14,7 @@ from hertz_chain.contact import (
     Hertz,
     HuntCrossley,
     KelvinVoigt,
+    Thornton,
     Tsuji,
     Viscoelastic,
     make_law,
@@ -97,7 +98,7 @@ def test_clamp_switch():
 
 
 def test_names():
-    assert [c.name for c in (Hertz, HuntCrossley, Tsuji, KelvinVoigt, Viscoelastic)] == list(LAW_NAMES)
+    assert [c.name for c in (Hertz, HuntCrossley, Tsuji, KelvinVoigt, Viscoelastic, Thornton)] == list(LAW_NAMES)
 
 
 ALL_LAWS = [

@@ -30,7 +30,7 @@ def test_every_entry_point_reads_the_registry():
         assert cls.name == name and callable(cls.from_config)
 
 
-def _file(law_lines: str, solver: str = "tsit5", gravity: str = "") -> str:
+def _file(law_lines: str, solver: str = "tsit5", gravity: str = "", radius: str = "") -> str:
     return f"""
 [drop]
 impact_velocity = "1 m/s"
@@ -38,6 +38,7 @@ impact_velocity = "1 m/s"
 [stack]
 masses = [1.0, 0.4, 0.16]
 gaps = "2 mm"
+{radius}
 [contact]
 {law_lines}
 [solver]
@@ -48,20 +49,31 @@ solver = "{solver}"
 def _law_lines(row: registry.LawRow, e: float | None) -> str:
     stiffness = "1e7 N/m" if row.stiffness == "linear_stiffness" else "1e9 N/m^1.5"
     lines = [f'law = "{row.name}"', f'stiffness = "{stiffness}"']
-    if e is not None and not row.elastic:
+    if e is not None and row.damping is not None:
         lines.append(f"restitution = {e}")
+    values = {"pressure": '"2 GPa"'}  # a row's further keys (`LawRow.params`), by dimension
+    lines += [f"{key} = {values[dim]}" for key, dim in row.params]
     return "\n".join(lines)
+
+
+def _radius(row: registry.LawRow) -> str:
+    return 'radius = "5 mm"' if row.needs_radius else ""
 
 
 @pytest.mark.parametrize("name", list(registry.LAWS))
 def test_every_law_runs_from_a_stack_file_and_meets_its_restitution(name):
     row = registry.LAWS[name]
     e = 1.0 if row.elastic else 0.7
-    built = build(stackfile.parse_stack(_file(_law_lines(row, e))))
+    built = build(stackfile.parse_stack(_file(_law_lines(row, e), radius=_radius(row))))
     law = built.stack.law_of(1)
     assert type(law).__name__ == row.cls
     sol = hc.simulate(built.stack, built.state, **built.simulate_options)
-    assert sol.ok and np.isfinite(sol.gain) and sol.energy_error < 1e-8
+    # a law with memory: the audit closes to the integration error at the default tolerance (the kink of
+    # its memory rate at every peak; docs/contact-laws.md), 1e-7; the others to 1e-8
+    assert sol.ok and np.isfinite(sol.gain) and sol.energy_error < (1e-7 if row.memory else 1e-8)
+    if row.memory:  # no calibration: e follows from its own parameters (tests/test_plastic.py)
+        assert built.stack.has_memory and np.isnan(built.nominal_restitution[1])
+        return
     # the law is calibrated to the file's e (the calibrations themselves are checked against simulated
     # impacts in tests/test_calibration.py); a speed-dependent law at the rigid approach speed of
     # interface 1 (Eqs 1-2): mass 1 leaves the ground at e v_ff and meets mass 2 falling at v_ff
@@ -71,7 +83,7 @@ def test_every_law_runs_from_a_stack_file_and_meets_its_restitution(name):
     assert built.nominal_restitution[1] == e
 
 
-@pytest.mark.parametrize("name", [n for n, r in registry.LAWS.items() if not r.elastic])
+@pytest.mark.parametrize("name", [n for n, r in registry.LAWS.items() if r.damping is not None])
 def test_every_damped_law_takes_its_raw_parameter(name):
     # the file key of the law's own damping parameter builds the law from the raw value
     row = registry.LAWS[name]
