@@ -18,6 +18,7 @@ $x(0) = 0$, $x'(0) = 1$):
 | `tsuji` | $x'' = -x^{3/2} - \eta x^{1/4} x'$ | $\eta$ (no $v$: $e$ is speed-independent) |
 | `kelvin-voigt` | $x'' = -x - 2\zeta x'$ | $\zeta = c / (2\sqrt{m^* k})$ (speed-independent) |
 | `viscoelastic` | $x'' = -x^{3/2} - \xi x^{1/2} x'$ | $\xi = \tfrac32 A (k/m^*)^{2/5} v^{1/5}$ |
+| `hertz-dashpot` | $x'' = -x^{3/2} - \zeta x'$ | $\zeta = \gamma\, m^{*-3/5} k^{-2/5} v^{-1/5}$ (e rises with $v$) |
 
 so $e$ is a function of that parameter alone (and of the clamp), $e = -x'(\tau_\mathrm{sep})$.
 
@@ -313,6 +314,11 @@ def _nondim_functions(law: str, p: float):
             lambda x, v: max(x, 0.0) ** 1.5 + p * math.sqrt(max(x, 0.0)) * v,
             lambda x, v: max(x, 0.0) + p * v,
         )
+    if law == "hertz-dashpot":  # the linear dashpot acts from the first touch (x >= 0): F(0+) = zeta x'
+        return (
+            lambda x, v: max(x, 0.0) ** 1.5 + p * v if x >= 0.0 else 0.0,
+            lambda x, v: max(x, 0.0) ** 1.5 + p * v,
+        )
     raise ParameterError("law", law, f"one of {list(_LAWS)}")
 
 
@@ -484,6 +490,33 @@ def viscoelastic_A_from_xi(xi: float, stiffness: float, effective_mass: float, i
     m = _check_positive(effective_mass, "effective_mass")
     v = _check_positive(impact_velocity, "impact_velocity")
     return _check_nonnegative(xi, "xi") / (1.5 * (k / m) ** 0.4 * v**0.2)
+
+
+@functools.lru_cache(maxsize=4096)
+def _dashpot_zeta_cached(e: float, clamp: bool) -> float:
+    return _invert("hertz-dashpot", e, clamp)
+
+
+def hertz_dashpot_zeta(e: float, clamp: bool = True) -> float:
+    r"""Scaled dashpot $\zeta = \gamma\, m^{*-3/5} k^{-2/5} v^{-1/5}$ of Hertz with a linear dashpot,
+    $F = k\delta^{3/2} + \gamma\dot\delta$ (Rosas, Romero, Nesterenko & Lindenberg 2007, Phys. Rev. Lett. 99,
+    164301), giving restitution $e$ at the speed $v$. Numerical inversion; cached on ``(e, clamp)``."""
+    e = check_restitution(e, minimum=MIN_CALIBRATED_RESTITUTION)
+    return _dashpot_zeta_cached(e, bool(clamp))
+
+
+def hertz_dashpot_restitution(zeta: float, clamp: bool = True) -> float:
+    r"""Restitution $e(\zeta)$ of Hertz with a linear dashpot (numerical)."""
+    return _e_of("hertz-dashpot", _check_nonnegative(zeta, "zeta"), bool(clamp))
+
+
+def hertz_dashpot_zeta_from_gamma(gamma: float, stiffness: float, effective_mass: float,
+                                  impact_velocity: float) -> float:
+    r"""$\zeta = \gamma\, m^{*-3/5} k^{-2/5} v^{-1/5}$: the dashpot's weight grows as the impact slows."""
+    k = _check_positive(stiffness, "stiffness")
+    m = _check_positive(effective_mass, "effective_mass")
+    v = _check_positive(impact_velocity, "impact_velocity")
+    return _check_nonnegative(gamma, "gamma") * m**-0.6 * k**-0.4 * v**-0.2
 
 
 def viscoelastic_restitution_series(xi: float | np.ndarray) -> float | np.ndarray:

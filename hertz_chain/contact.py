@@ -45,6 +45,7 @@ __all__ = [
     "Tsuji",
     "KelvinVoigt",
     "Viscoelastic",
+    "HertzDashpot",
     "Thornton",
     "LAW_NAMES",
     "make_law",
@@ -449,6 +450,70 @@ class Viscoelastic(_HertzianElastic):
         return jnp.where(mask, 1.5 * self.k * self.A * jnp.sqrt(d) * delta_dot, 0.0)
 
 
+class HertzDashpot(_HertzianElastic):
+    """Hertz with a linear dashpot, ``F = k delta^{3/2} + gamma delta_dot`` (gamma in N s/m): the model
+    of dissipative granular chains of Rosas, Romero, Nesterenko & Lindenberg (2007), "Observation of
+    two-wave structure in strongly nonlinear dissipative granular chains", Phys. Rev. Lett. 99, 164301.
+
+    The dashpot acts from the first touch, so the force jumps to ``gamma v`` at contact (a rough onset for
+    the solver and for gradients: `registry.LawRow.smooth_onset` is False). Its restitution depends on
+    the impact speed and the effective mass: in Hertz units it is a function of
+    ``zeta = gamma m*^{-3/5} k^{-2/5} v^{-1/5}`` alone (`calibration.hertz_dashpot_zeta`), so with
+    ``gamma`` fixed ``e`` *rises* with the impact speed (the opposite of Hunt–Crossley and the
+    viscoelastic law). ``from_restitution`` calibrates ``gamma`` at one speed.
+    """
+
+    name: ClassVar[str] = "hertz-dashpot"
+    k: Array
+    gamma: Array
+    clamp: bool = eqx.field(static=True, default=True)
+
+    def __init__(self, k: ArrayLike, gamma: ArrayLike, clamp: bool = True):
+        self.k = jnp.asarray(k, dtype=float)
+        self.gamma = jnp.asarray(gamma, dtype=float)
+        self.clamp = clamp
+
+    @classmethod
+    def from_restitution(cls, k, restitution: float, m_eff, calibration_velocity: float,
+                         clamp: bool = True) -> "HertzDashpot":
+        """``gamma = zeta(e) m*^{3/5} k^{2/5} v_c^{1/5}``, so that the impact at ``v_c`` has restitution e."""
+        k, m = _stiffness(k), _positive(m_eff, "effective_mass")
+        v = _positive(calibration_velocity, "calibration_velocity")
+        return cls(k, _cal.hertz_dashpot_zeta(restitution, clamp) * m**0.6 * k**0.4 * v**0.2, clamp)
+
+    @classmethod
+    def from_config(cls, k, *, restitution=None, damping=None, effective_mass=None, calibration_velocity=None,
+                    chi_map="exact", clamp=True) -> "HertzDashpot":
+        """`make_law`'s constructor: ``gamma = damping``, or calibrated to ``restitution`` at
+        ``calibration_velocity`` (needs ``effective_mass``)."""
+        if restitution is None:
+            return cls(_stiffness(k), damping, clamp)
+        m = _positive(_require(effective_mass, "effective_mass", cls.name), "effective_mass")
+        v = _positive(_require(calibration_velocity, "calibration_velocity", cls.name), "calibration_velocity")
+        return cls.from_restitution(k, restitution, m, v, clamp)
+
+    @classmethod
+    def dimensionless_damping(cls, restitution, *, chi_map="exact", clamp=True) -> float:
+        """``zeta(e, clamp)`` (`calibration.hertz_dashpot_zeta`)."""
+        return _cal.hertz_dashpot_zeta(restitution, clamp)
+
+    @classmethod
+    def from_dimensionless(cls, k, d, *, effective_mass, calibration_velocity, clamp=True) -> "HertzDashpot":
+        """``gamma = zeta m*^{3/5} k^{2/5} v_c^{1/5}``."""
+        return cls(k, d * effective_mass**0.6 * k**0.4 * calibration_velocity**0.2, clamp)
+
+    def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
+        """``e(zeta)`` with ``zeta = gamma m*^{-3/5} k^{-2/5} v^{-1/5}``; rises with ``v``."""
+        v = _velocity(impact_velocity)
+        m = _positive(_require(effective_mass, "effective_mass", self.name), "effective_mass")
+        zeta = np.asarray(self.gamma, dtype=float) * m**-0.6 * np.asarray(self.k, dtype=float) ** -0.4 * v**-0.2
+        return _scalar(np.vectorize(lambda z: _cal.hertz_dashpot_restitution(z, self.clamp))(zeta))
+
+    def damping_force(self, delta: ArrayLike, delta_dot: ArrayLike) -> Array:
+        mask, _ = _positive_part(delta)
+        return jnp.where(mask, self.gamma * delta_dot, 0.0)
+
+
 class Thornton(AbstractContactLaw):
     """Elastic–perfectly plastic contact of Thornton (1997), "Coefficient of restitution for collinear
     collisions of elastic-perfectly plastic spheres", J. Appl. Mech. 64, 383.
@@ -664,6 +729,7 @@ def make_law(
       | ``tsuji`` | ``eta`` or ``damping`` (= eta) | ``effective_mass`` (always needed) |
       | ``kelvin-voigt`` | ``damping`` (= c, N s/m) | ``effective_mass`` |
       | ``viscoelastic`` | ``A`` or ``damping`` (= A, s) | ``effective_mass``, ``calibration_velocity`` |
+      | ``hertz-dashpot`` | ``damping`` (= gamma, N s/m) | ``effective_mass``, ``calibration_velocity`` |
       | ``thornton`` | ``yield_pressure`` (Pa) and ``effective_radius`` (m); no ``restitution`` | — |
 
       ``e`` is reproduced exactly (to ~1e-11) in the isolated impact, with or without the clamp

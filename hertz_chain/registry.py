@@ -112,6 +112,8 @@ LAWS: dict[str, LawRow] = {row.name: row for row in (
            needs_effective_mass=True),
     LawRow("viscoelastic", "Viscoelastic", damping="damping", damping_dimension="time", damping_max=1.0,
            damping_label="A, s", aliases=("A",), speed_dependent=True, needs_effective_mass=True),
+    LawRow("hertz-dashpot", "HertzDashpot", damping="damping", damping_dimension="viscous_damping",
+           damping_max=1e9, damping_label="gamma, N s/m", speed_dependent=True, needs_effective_mass=True),
     LawRow("thornton", "Thornton", memory=True, params=(("yield_pressure", "pressure"),), needs_radius=True),
 )}
 """Contact laws by configuration name (see `LawRow`)."""

@@ -11,7 +11,9 @@ References:
   scales as `V_s ∝ v_m^{1/5}` with the particle velocity `v_m`. For a Hertz chain of equal beads the
   scaling is exact (the equations are invariant under `x -> mu x`, `t -> mu^{-1/4} t`, so velocities
   scale as `mu^{5/4}` and wave speeds in beads per second as `mu^{1/4}`), so two strikes at speeds in the
-  ratio 4 give wave speeds in the ratio `4^{1/5}` to the accuracy of the solve;
+  ratio 4 give wave speeds in the ratio `4^{1/5}` to the accuracy of the solve; the wave's peak bead
+  velocity (0.6816 of an equal striker's speed) and the recoils of the striker and the next bead (-0.07109,
+  -0.03027), docs/references.md, "Stacks and chains";
 - the size limits of `constants.MAX_MASSES`.
 """
 
@@ -79,13 +81,18 @@ def _wave_times(v0: float, n: int = 40, probes=(10, 30)):
     grid = np.linspace(0.0, 1.3 * n * t_c, 40 * n)
     sol = hc.simulate(stack, state, ts=grid, tolerances=hc.Tolerances(rtol=1e-11, atol=1e-11), max_steps=200_000)
     f = np.asarray(sol.grid.forces)
+    _wave_times.last = sol
     out = []
     for j in probes:
         i = int(np.nanargmax(f[:, j]))
         y0, y1, y2 = f[i - 1, j], f[i, j], f[i + 1, j]
         h = grid[1] - grid[0]
         out.append(grid[i] + 0.5 * h * (y0 - y2) / (y0 - 2 * y1 + y2))
-    return np.asarray(out), float(np.nanmax(np.asarray(sol.grid.velocities)[:, 20]))
+    vel = np.asarray(sol.grid.velocities)[:, 20]
+    i = int(np.nanargmax(vel))
+    y0, y1, y2 = vel[i - 1 : i + 2]
+    v_peak = y1 - 0.125 * (y2 - y0) ** 2 / (y2 - 2 * y1 + y0)  # the parabola's vertex
+    return np.asarray(out), float(v_peak)
 
 
 def test_solitary_wave_speed_follows_nesterenkos_one_fifth_power():
@@ -95,3 +102,8 @@ def test_solitary_wave_speed_follows_nesterenkos_one_fifth_power():
     # the particle velocity of the wave scales with the striker speed (similarity), and the speed as its 1/5 power
     assert vm2 / vm1 == pytest.approx(4.0, rel=1e-6)
     assert speed2 / speed1 == pytest.approx(4.0**0.2, rel=1e-4)  # parabolic peak times: ~1e-5 measured
+    # the wave's bead velocity and the recoil of the striker and of bead 2 (equal striker): 0.6816, -0.07109
+    # and -0.03027 of the striker speed (docs/references.md, "Stacks and chains"; 4 digits given)
+    assert vm2 / 2.0 == pytest.approx(0.6816, abs=1e-4)
+    v_end = np.asarray(_wave_times.last.launch_velocities)[:2] / 2.0
+    np.testing.assert_allclose(v_end, [-0.07109, -0.03027], atol=1e-5)
