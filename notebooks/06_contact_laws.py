@@ -15,13 +15,15 @@
 #
 # The seed paper models every impact with one number, the coefficient of restitution `e` (Eq 2), and
 # takes it constant (`e = 0.8` in Sections 4–5). The compliant simulator replaces it with a contact
-# force law; the five laws of `hertz_chain.contact` (`LAW_NAMES`) are calibrated to `e = 0.8` at
-# `v_c = 1 m/s`, and then:
+# force law; the laws of `hertz_chain.contact` (`LAW_NAMES`) are calibrated to `e = 0.8` at
+# `v_c = 1 m/s` (the elastic–plastic Thornton law through its yield overlap), and then:
 #
 # 1. **`e(v)`** — one isolated impact per law and speed, measured with `hertz_chain.restitution`
 #    (diffrax, rtol = atol = 1e-11) and compared with each law's closed form or scipy calibration:
 #    Hertz `e = 1`; Tsuji and Kelvin–Voigt constant; Hunt–Crossley falling with `χ = αv` (exact map of
-#    Carvalho & Martins 2019); viscoelastic falling with `ξ ∝ v^{1/5}` (Brilliantov et al. 1996).
+#    Carvalho & Martins 2019); viscoelastic falling with `ξ ∝ v^{1/5}` (Brilliantov et al. 1996); Hertz
+#    with a linear dashpot *rising* with `v` (`ζ ∝ v^{-1/5}`; Rosas et al. 2007); Thornton (1997) 1 below
+#    the yield velocity, then falling by its closed form.
 # 2. **Calibration maps** — the `e` that each published Hunt–Crossley map `χ(e)` really produces
 #    (`chi_map_table`), against the values listed in `docs/references.md, "Restitution maps"`, and checked by simulation.
 #    Also the effect of the no-tension clamp on the Tsuji and Kelvin–Voigt calibrations.
@@ -40,6 +42,7 @@ import matplotlib.pyplot as plt
 from _nbutil import QUICK, show, write_table
 import hertz_chain as hc
 from hertz_chain import calibration
+from scipy.optimize import brentq
 
 T0 = time.perf_counter()
 M, K, E, VC = 1.0, 1e9, 0.8, 1.0
@@ -53,7 +56,21 @@ laws = {
     "tsuji": hc.make_law("tsuji", stiffness=K, restitution=E, effective_mass=M),
     "kelvin-voigt": hc.make_law("kelvin-voigt", stiffness=K_LIN, restitution=E, effective_mass=M),
     "viscoelastic": hc.make_law("viscoelastic", stiffness=K, restitution=E, effective_mass=M, calibration_velocity=VC),
+    "hertz-dashpot": hc.make_law("hertz-dashpot", stiffness=K, restitution=E, effective_mass=M, calibration_velocity=VC),
 }
+
+
+def thornton_e(r):
+    """Thornton (1997): e for r = V_y / V_i <= 1 (docs/references.md, "Elastic-plastic contact")."""
+    r = np.minimum(r, 1.0)
+    return np.sqrt(6 * np.sqrt(3) / 5) * np.sqrt(1 - r**2 / 6) * (r / (r + 2 * np.sqrt(6 / 5 - r**2 / 5))) ** 0.25
+
+
+# Thornton's elastic-plastic law with the yield overlap that gives e = 0.8 at 1 m/s: V_y from the closed form,
+# then delta_y from m* V_y^2 / 2 = (2/5) k delta_y^{5/2}
+R_Y = brentq(lambda r: thornton_e(r) - E, 1e-6, 1.0)
+DELTA_Y = (1.25 * M * (R_Y * VC) ** 2 / K) ** 0.4
+laws["thornton"] = hc.Thornton(K, DELTA_Y)
 assert tuple(laws) == hc.LAW_NAMES  # every law of the package
 print(f"Hertz contact time at 1 m/s: {TC_HERTZ * 1e3:.4f} ms; k_lin = {K_LIN:.4e} N/m")
 
@@ -78,6 +95,10 @@ e_ref = {
     "tsuji": np.full_like(vs, E),
     "kelvin-voigt": np.full_like(vs, E),
     "viscoelastic": np.array([calibration.viscoelastic_restitution(x) for x in xi]),
+    # zeta = gamma m^{-3/5} k^{-2/5} v^{-1/5} (docs/references.md, "Damped Hertz laws"), e from scipy
+    "hertz-dashpot": np.array([calibration.hertz_dashpot_restitution(float(laws["hertz-dashpot"].gamma)
+                                                                     * M**-0.6 * K**-0.4 * v**-0.2) for v in vs]),
+    "thornton": thornton_e(R_Y * VC / vs),
 }
 for name in laws:
     dev = np.max(np.abs(e_sim[name] - e_ref[name]))
@@ -88,6 +109,8 @@ assert np.isclose(visco.restitution_at(VC, M), E, rtol=1e-10)
 assert np.allclose(laws["tsuji"].restitution_at(vs), E, rtol=1e-10)
 # falling e: Hunt-Crossley and viscoelastic
 assert np.all(np.diff(e_sim["hunt-crossley"]) < 0) and np.all(np.diff(e_sim["viscoelastic"]) < 0)
+# rising e: Hertz with a linear dashpot (zeta falls as v^{-1/5}); falling, then 1 below V_y: Thornton
+assert np.all(np.diff(e_sim["hertz-dashpot"]) > 0) and np.all(np.diff(e_sim["thornton"]) <= 1e-12)
 # viscoelastic: series (Ramirez 1999) is O(xi^3); the Pade fit (Muller & Poschel 2011) is a fit
 series = calibration.viscoelastic_restitution_series(xi)
 pade = calibration.viscoelastic_restitution_pade(xi)
@@ -101,7 +124,9 @@ vfine = np.geomspace(0.1, 10.0, 100)
 xf = 1.5 * float(visco.A) * (K / M) ** 0.4 * vfine**0.2
 curves = {"hertz": np.ones_like(vfine), "hunt-crossley": calibration.hunt_crossley_restitution(hc_alpha, vfine),
           "tsuji": np.full_like(vfine, E), "kelvin-voigt": np.full_like(vfine, E),
-          "viscoelastic": calibration.viscoelastic_restitution_pade(xf)}
+          "viscoelastic": calibration.viscoelastic_restitution_pade(xf),
+          "hertz-dashpot": np.interp(np.log(vfine), np.log(vs), e_ref["hertz-dashpot"]),
+          "thornton": thornton_e(R_Y * VC / vfine)}
 for i, name in enumerate(laws):
     ax.semilogx(vfine, curves[name], color=f"C{i}", lw=1, ls="--" if name == "kelvin-voigt" else "-")
     ax.semilogx(vs, e_sim[name], "o", color=f"C{i}", ms=5, label=f"{name} (simulated)")
@@ -264,8 +289,10 @@ for r in rows_pulse:
           f"peak at {r[5]:.3f} t_c  F(0+) = {r[6]:.3g} N")
 byname = {r[0]: r for r in rows_pulse}
 assert byname["kelvin-voigt"][6] > 100 and byname["hertz"][6] < 1e-6  # jump at first touch only for the linear law
-assert max(byname, key=lambda n: byname[n][2]) == "hunt-crossley" and min(byname, key=lambda n: byname[n][2]) == "tsuji"
-assert min(byname, key=lambda n: byname[n][3]) == "kelvin-voigt"
+viscous = ("hertz", "hunt-crossley", "tsuji", "kelvin-voigt", "viscoelastic")  # the statements above are about these
+assert max(viscous, key=lambda n: byname[n][2]) == "hunt-crossley" and min(viscous, key=lambda n: byname[n][2]) == "tsuji"
+assert min(viscous, key=lambda n: byname[n][3]) == "kelvin-voigt"
+assert byname["hertz-dashpot"][6] > 100  # the linear dashpot jumps at first touch too
 assert np.isclose(byname["hunt-crossley"][5], 0.394, atol=0.002)
 assert np.isclose(byname["hertz"][5], 0.5, atol=1e-3)  # elastic: symmetric pulse
 assert all(byname[n][5] < 0.5 for n in ("hunt-crossley", "tsuji", "kelvin-voigt", "viscoelastic"))  # damping: early peak

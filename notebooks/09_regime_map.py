@@ -30,8 +30,9 @@
 # (with it, crossing 1 cm gaps takes tens of ms and gravity changes the velocities being compared).
 #
 # Reference for the checks: the rigid gain of paper Eq 19 (exact for independent collisions) and the
-# closed-form Hertz contact time `t_c = 3.21807 (m*/k)^{2/5} u^{-1/5}` (docs/references.md, "Hertz
-# single impact"); the boundary is compared with notebook 05's, found there by a separate computation.
+# closed-form Hertz contact time `t_c = 3.21807 (m*/k)^{2/5} u^{-1/5}`
+# (docs/references.md, "Hertz single impact"); the boundary is compared with notebook 05's, found there
+# by a separate computation.
 
 # %%
 import tempfile

@@ -52,7 +52,7 @@ def _stack_doc(law="tsuji", gravity=None, gaps="1 mm", masses=(1.0, 0.3, 0.1), *
 
 
 # ------------------------------------------------------------------------------------ the design map
-@pytest.mark.parametrize("law", list(LAWS))
+@pytest.mark.parametrize("law", [name for name, row in LAWS.items() if not row.memory])
 def test_design_map_reproduces_build_of_the_written_file(law):
     """At the file's values the map is `build(spec)`; at other values it is `build` of the stack file
     written with those values (`--write`), under gravity with gaps, for every law of the registry."""
@@ -74,6 +74,17 @@ def test_design_map_reproduces_build_of_the_written_file(law):
     ref = build(written)
     for got, want in zip(leaves(dm(x)), leaves((ref.stack, ref.state))):
         np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-15)
+
+
+def test_a_law_with_memory_is_refused_in_one_line():
+    """Elastic–plastic laws (their state carries the largest overlap) are not yet supported by the design map
+    behind optimize and sweep: refused before anything runs, naming the law and the interface."""
+    doc = _stack_doc("hertz")
+    doc["contact"] = {"law": "thornton", "stiffness": "1e9 N/m^1.5", "yield_pressure": "2 GPa"}
+    doc["stack"]["radius"] = "5 mm"
+    spec = parse_stack(doc)
+    with pytest.raises(StackFileError, match=r"optimize\.vary: contact law 'thornton' \(interface 0\)"):
+        DesignMap(spec, resolve("stack.masses", [2], n=3, ground=True))
 
 
 @pytest.mark.parametrize("law", ["hertz", "hunt-crossley"])
