@@ -127,7 +127,7 @@ class _Contacts(eqx.Module):
     that launch velocities and the energy audit need no step history (a history of `max_steps` rows is
     the dominant cost of a vmapped solve, where every step selects over the whole buffer).
 
-    `rows (n, 7)`: per interface, the latest accepted point in contact (scaled time, -1 if never) and the
+    `rows (n, 6)` (`(n, 7)` with a law with memory): per interface, the latest accepted point in contact (scaled time, -1 if never) and the
     first accepted point after it (scaled time, SI overlap, overlap rate, and the velocities of the lower
     and upper body, 0 for the ground, and the memory `q` of a law with memory, else 0); `now (n,)`: in contact at the latest point; `cascade (n + 5,)`:
     `[over, rebounds, t_c, top_done, v_top, v_c...]`: whether the first cascade is over (`_cascade_over` held
@@ -156,7 +156,8 @@ class _Contacts(eqx.Module):
         e = stack.total_energy(y) if audit else None
         v_top = ys[2 * n - 1]
         if c is None:
-            c = _Contacts(jnp.broadcast_to(jnp.asarray([-1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]), d.shape + (7,)),
+            cols = 7 if q is not None else 6
+            c = _Contacts(jnp.broadcast_to(jnp.asarray([-1.0] + [0.0] * (cols - 1)), d.shape + (cols,)),
                           active & False, jnp.concatenate([jnp.zeros(4), v_top[None], ys[n : 2 * n]]),
                           None if e is None else (e, 0.0 * e))
         was_over, top_done = c.cascade[0] > 0, c.cascade[3] > 0
@@ -164,9 +165,9 @@ class _Contacts(eqx.Module):
         left = c.now & ~active
         t = jnp.broadcast_to(t, d.shape).astype(d.dtype)
         v_lo = jnp.concatenate([jnp.zeros(1, v.dtype), v[:-1]])
-        q_now = jnp.zeros_like(d) if q is None else q
-        rows = jnp.where(jnp.stack([active] + [left] * 6, axis=-1) & ~frozen[:, None],
-                         jnp.stack([t, t, d, dd, v_lo, v, q_now], axis=-1), c.rows)
+        extra = [] if q is None else [q]  # a law with memory: its memory after the contact
+        rows = jnp.where(jnp.stack([active] + [left] * (5 + len(extra)), axis=-1) & ~frozen[:, None],
+                         jnp.stack([t, t, d, dd, v_lo, v] + extra, axis=-1), c.rows)
         now = jnp.where(frozen, c.now, active)
         over = _cascade_over(t[0], ys, args, x, v, d, dd, active, q)
         if launch and n >= 2:  # `until="launch"`: or as soon as the top mass's launch is final
