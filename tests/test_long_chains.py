@@ -12,7 +12,8 @@ References:
   scaling is exact (the equations are invariant under `x -> mu x`, `t -> mu^{-1/4} t`, so velocities
   scale as `mu^{5/4}` and wave speeds in beads per second as `mu^{1/4}`), so two strikes at speeds in the
   ratio 4 give wave speeds in the ratio `4^{1/5}` to the accuracy of the solve; the wave's peak bead
-  velocity (0.6816 of an equal striker's speed) and the recoils of the striker and the next bead (-0.07109,
+  velocity (0.6816 of an equal striker's speed), its speed `0.9075 (k/m)^{2/5} v_m^{1/5}` beads per second,
+  and the recoils of the striker and the next bead (-0.07109,
   -0.03027), docs/references.md, "Stacks and chains";
 - the size limits of `constants.MAX_MASSES`.
 """
@@ -105,5 +106,9 @@ def test_solitary_wave_speed_follows_nesterenkos_one_fifth_power():
     # the wave's bead velocity and the recoil of the striker and of bead 2 (equal striker): 0.6816, -0.07109
     # and -0.03027 of the striker speed (docs/references.md, "Stacks and chains"; 4 digits given)
     assert vm2 / 2.0 == pytest.approx(0.6816, abs=1e-4)
+    # the discrete chain's wave speed in beads per second, 0.9075 (k/m)^{2/5} v_m^{1/5} (same section;
+    # the continuum's (16/25)^{1/5} = 0.9146 is 0.8 % higher)
+    m, k = 0.0045, 1.2e10
+    assert speed2 / ((k / m) ** 0.4 * vm2**0.2) == pytest.approx(0.9075, abs=1e-4)
     v_end = np.asarray(_wave_times.last.launch_velocities)[:2] / 2.0
     np.testing.assert_allclose(v_end, [-0.07109, -0.03027], atol=1e-5)
