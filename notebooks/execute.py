@@ -31,7 +31,7 @@ def main(argv=None) -> int:
     import nbformat
     from nbclient import NotebookClient
 
-    paths = sorted(p for p in HERE.glob("0*.py") if not args.only or any(p.name.startswith(k) for k in args.only))
+    paths = sorted(p for p in HERE.glob("[0-9][0-9]_*.py") if not args.only or any(p.name.startswith(k) for k in args.only))
     if not paths:
         print(f"execute.py: error: no notebook matches {args.only}", file=sys.stderr)
         return 2

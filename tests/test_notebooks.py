@@ -1,6 +1,6 @@
 """Every notebook in notebooks/ runs, in quick mode, so that none of them rots.
 
-Each `notebooks/0*.py` (jupytext percent format) is parsed into a notebook in memory with jupytext
+Each `notebooks/NN_*.py` (jupytext percent format) is parsed into a notebook in memory with jupytext
 and executed cell by cell with nbclient in a `python3` kernel, with the working directory `notebooks/`
 (where `_nbutil.py` lives) and `HERTZ_CHAIN_QUICK=1` (coarse grids; each notebook takes well under a
 minute). The test session's cache folder comes from `conftest.py` and reaches the kernel through the
@@ -26,7 +26,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = ROOT / "notebooks"
-PATHS = sorted(NOTEBOOKS.glob("0*.py"))
+PATHS = sorted(NOTEBOOKS.glob("[0-9][0-9]_*.py"))
 TIMEOUT = 600  # seconds per cell / per script
 
 jupytext = pytest.importorskip("jupytext")
