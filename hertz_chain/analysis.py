@@ -30,7 +30,7 @@ import warnings
 
 import numpy as np
 
-from .episodes import ContactEpisode, contact_episodes
+from .episodes import ContactEpisode, contact_episodes, refined_peak
 from .errors import HertzChainError, ParameterError, SolverError
 from .pulse import G0, PulseMetrics, pulse_metrics
 from .rigid import chain_gain, stack_gain
@@ -91,6 +91,8 @@ class Report:
     rebounds: tuple[ContactEpisode, ...] = ()  # later impacts, kept out of every headline number
     warnings: tuple[str, ...] = ()
     solution: object = dataclasses.field(repr=False, default=None)
+    peak_velocities: np.ndarray | None = None  # (n,) each mass's largest upward velocity in the first cascade
+    peak_velocity_times: np.ndarray | None = None  # (n,) and when (Hermite-refined with the accelerations)
 
     @property
     def top_pulse(self) -> PulseMetrics | None:
@@ -297,6 +299,7 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     ind = independence(episodes, interfaces)
     rigid = _rigid_comparison(sol, e_meas, nominal_restitution, v_ref)
     regime = "independent" if ind < INDEPENDENT_BELOW else "overlapping"
+    peak_t, peak_v = _peak_velocities(st, sol.cascade_end_time)
     return Report(
         status=sol.status,
         drop_speed=v_ref,
@@ -321,7 +324,26 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
         rebounds=tuple(rebounds),
         warnings=tuple(_warnings(sol, e_meas, nominal_restitution, regime, tolerances)),
         solution=sol,
+        peak_velocities=peak_v,
+        peak_velocity_times=peak_t,
     )
+
+
+def _peak_velocities(st, t_end) -> tuple[np.ndarray, np.ndarray]:
+    """Per mass, the time and value of its largest upward velocity up to `t_end` (the end of the first
+    cascade; the whole history when it did not end): the cubic Hermite interpolant of the velocity with
+    the acceleration as its derivative (`episodes.refined_peak`)."""
+    t = np.asarray(st.t, dtype=float)
+    v, a = np.asarray(st.velocities, dtype=float), np.asarray(st.accelerations, dtype=float)
+    i1 = len(t) - 1 if not np.isfinite(t_end) else max(int(np.searchsorted(t, t_end, side="right")) - 1, 0)
+    out = []
+    for i in range(v.shape[1]):
+        top = float(np.max(v[: i1 + 1, i]))
+        # the first sample at the peak: without gravity a launched mass keeps its velocity, and the time of
+        # its peak is when it got there (round-off must not pick a later sample)
+        k = int(np.argmax(v[: i1 + 1, i] >= top - 1e-9 * max(abs(top), 1e-300)))
+        out.append(refined_peak(t, v[:, i], a[:, i], k, k))
+    return np.array([o[0] for o in out]), np.array([o[1] for o in out])
 
 
 #: Warnings (issue 16): an energy audit worse than this (relative to the drop energy) ...

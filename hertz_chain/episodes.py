@@ -36,7 +36,9 @@ class ContactEpisode:
     `approach_velocity` is `delta_dot` at the start (> 0 while approaching) and
     `separation_velocity` is `-delta_dot` at the end (> 0 while separating).
     `complete` is False when the contact was already closed at the first sample or still closed at the
-    last one; its restitution is then NaN, by design, and says so.
+    last one; its restitution is then NaN, by design, and says so. `peak_force` is the largest sample
+    (the value the exported data hold); `peak_force_time` the time of the peak of the parabola through
+    it and its neighbours (`parabolic_peak`).
     """
 
     interface: int
@@ -47,6 +49,7 @@ class ContactEpisode:
     approach_velocity: float
     separation_velocity: float
     complete: bool
+    peak_force_time: float = float("nan")
 
     @property
     def duration(self) -> float:
@@ -101,18 +104,46 @@ def _crossing(t0, t1, y0, y1, d0, d1) -> tuple[float, float]:
     return float(t0 + s), rate
 
 
-def _refined_max(t, y, dy, i0, i1) -> float:
-    """Maximum of the Hermite interpolant of ``y`` around its largest sample in ``[i0, i1]``."""
+def refined_peak(t, y, dy, i0, i1) -> tuple[float, float]:
+    """``(time, value)`` of the maximum of the cubic Hermite interpolant of samples ``y`` with
+    derivatives ``dy`` around the largest sample in ``[i0, i1]`` (the one home of this refinement:
+    overlaps with their rates, velocities with their accelerations)."""
     k = i0 + int(np.argmax(y[i0 : i1 + 1]))
-    best = float(y[k])
+    best, t_best = float(y[k]), float(t[k])
     for a, b in ((k - 1, k), (k, k + 1)):
         if a < 0 or b >= len(t) or t[b] <= t[a]:
             continue
         c = _hermite(t[a], t[b], y[a], y[b], dy[a], dy[b])
         for s in np.roots(np.polyder(c)) if np.any(c[:2] != 0) else []:
             if abs(s.imag) < 1e-12 and 0.0 <= s.real <= t[b] - t[a]:
-                best = max(best, float(np.polyval(c, s.real)))
-    return best
+                val = float(np.polyval(c, s.real))
+                if val > best:
+                    best, t_best = val, float(t[a] + s.real)
+    return t_best, best
+
+
+def parabolic_peak(t, y, i0, i1) -> tuple[float, float]:
+    """``(time, value)`` of the vertex of the parabola through the largest sample of ``y`` in ``[i0, i1]``
+    and its two neighbours (the sample itself at an end or on uneven ground): for samples without a
+    derivative, such as contact forces. Error O(h^2) of the local step h."""
+    k = i0 + int(np.argmax(y[i0 : i1 + 1]))
+    if k - 1 < 0 or k + 1 >= len(t):
+        return float(t[k]), float(y[k])
+    (t0, t1, t2), (y0, y1, y2) = t[k - 1 : k + 2], y[k - 1 : k + 2]
+    den = (t0 - t1) * (t0 - t2) * (t1 - t2)
+    a = (t2 * (y1 - y0) + t1 * (y0 - y2) + t0 * (y2 - y1)) / den
+    b = (t2**2 * (y0 - y1) + t1**2 * (y2 - y0) + t0**2 * (y1 - y2)) / den
+    if not a < 0:
+        return float(t1), float(y1)
+    tv = -b / (2 * a)
+    if not t0 <= tv <= t2:
+        return float(t1), float(y1)
+    return float(tv), float(y1 + a * (tv - t1) ** 2 + (2 * a * t1 + b) * (tv - t1))
+
+
+def _refined_max(t, y, dy, i0, i1) -> float:
+    """Maximum of the Hermite interpolant of ``y`` around its largest sample in ``[i0, i1]``."""
+    return refined_peak(t, y, dy, i0, i1)[1]
 
 
 def _free_side_release(ta, ya, da, aa, tb, sep) -> tuple[float, float] | None:
@@ -245,6 +276,7 @@ def contact_episodes(
                     end=float(t_end),
                     max_overlap=_refined_max(t, d[:, j], r[:, j], i0, i1),
                     peak_force=float(f[run, j].max()),
+                    peak_force_time=parabolic_peak(t, f[:, j], i0, i1)[0],
                     approach_velocity=float(v_in),
                     separation_velocity=float(-v_out),
                     complete=bool(complete),

@@ -48,6 +48,7 @@ def _episode_dict(ep) -> dict:
         "separation_velocity_mps": ep.separation_velocity,
         "max_overlap_m": ep.max_overlap,
         "peak_force_N": ep.peak_force,
+        "peak_force_time_s": _num(ep.peak_force_time),
         "complete": ep.complete,
     }
 
@@ -84,6 +85,8 @@ def to_dict(report: Report) -> dict:
         "top_velocity_gain": _num(report.top_velocity_gain),
         "velocity_gains": _nums(report.velocity_gains),
         "launch_velocities_mps": _nums(report.launch_velocities),
+        "peak_velocities_mps": None if report.peak_velocities is None else _nums(report.peak_velocities),
+        "peak_velocity_times_s": None if report.peak_velocity_times is None else _nums(report.peak_velocity_times),
         "top_efficiency": _num(report.top_efficiency),
         "rigid": {
             "nominal_gain": _num(rigid.nominal_gain),
@@ -226,6 +229,19 @@ def to_dataset(report: Report):
         "velocity_gain": (("mass",), report.velocity_gains, {"units": "1"}),
         "restitution_measured": (("interface",), report.restitution, {"units": "1"}),
     }
+    if report.peak_velocities is not None:
+        data["peak_velocity"] = (("mass",), report.peak_velocities,
+                                 {"units": "m/s", "long_name": "largest upward velocity in the first cascade"})
+        data["peak_velocity_time"] = (("mass",), report.peak_velocity_times, {"units": "s"})
+    strongest = {}  # per interface, the first-cascade episode with the largest force
+    for ep in report.episodes:
+        if ep.interface not in strongest or ep.peak_force > strongest[ep.interface].peak_force:
+            strongest[ep.interface] = ep
+    data["peak_force"] = (("interface",), [strongest[j].peak_force if j in strongest else np.nan for j in range(n)],
+                          {"units": "N", "long_name": "largest sampled contact force in the first cascade"})
+    data["peak_force_time"] = (("interface",),
+                               [strongest[j].peak_force_time if j in strongest else np.nan for j in range(n)],
+                               {"units": "s", "long_name": "time of that peak (parabola through the samples)"})
     pulse_fields = (("pulse_peak_g", "peak_g", "g"), ("pulse_duration", "duration_10", "s"),
                     ("pulse_rise_time", "rise_time", "s"), ("pulse_delta_v", "delta_v_main", "m/s"),
                     ("pulse_half_sine_duration", "equivalent_half_sine_duration", "s"))

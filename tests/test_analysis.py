@@ -100,6 +100,17 @@ def test_single_hertz_bounce_pulse():
     assert r.top_pulse.delta_v_main == pytest.approx(2 * v, rel=1e-6)  # elastic: -v -> +v
     # peak read at the solver's steps: within (step/t_c)^2 of F_max/m
     assert r.top_pulse.peak == pytest.approx(f_max / m, rel=1e-4)
+    # the elastic pulse is symmetric: its peak at t_c / 2 (parabola through the samples: O(step^2));
+    # the mass reaches its peak velocity v as the contact ends, at t_c (Hermite with the accelerations)
+    t_c = 2.94328 * d_max / v
+    assert ep.peak_force_time == pytest.approx(0.5 * t_c, rel=1e-4)
+    assert r.peak_velocities[0] == pytest.approx(v, rel=1e-8)
+    assert r.peak_velocity_times[0] == pytest.approx(t_c, rel=1e-4)
+    from hertz_chain.report import to_dict
+
+    d = to_dict(r)
+    assert d["contacts"][0]["peak_force_time_s"] == ep.peak_force_time
+    assert d["peak_velocity_times_s"] == [r.peak_velocity_times[0]]
 
 
 def test_horizontal_chain_follows_eq13():
