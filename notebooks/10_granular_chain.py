@@ -19,9 +19,9 @@
 # 2001): a compression pulse about five beads long that runs unchanged at a speed set by its own
 # amplitude. This notebook runs it on a 200-bead chain (60 in the quick mode) and checks:
 #
-# 1. **Speed and amplitude** against the discrete chain's numbers (docs/references.md, "Stacks and
-#    chains": peak bead velocity `0.6816 v0` for an equal striker, speed `0.9075 (k/m)^{2/5} v_m^{1/5}`
-#    beads per second) and Nesterenko's continuum solution (`(16/25)^{1/5} = 0.9146`, 0.8 % faster);
+# 1. **Speed and amplitude** against the discrete chain's numbers
+#    (docs/references.md, "Stacks and chains": peak bead velocity `0.6816 v0` for an equal striker,
+#    speed `0.9075 (k/m)^{2/5} v_m^{1/5}` beads per second) and Nesterenko's continuum solution (`(16/25)^{1/5} = 0.9146`, 0.8 % faster);
 # 2. **Width** against the continuum's profile: strain `∝ cos⁴(√10 x / (5a))` over one wavelength of
 #    `π√10/2 ≈ 4.97` bead diameters `a`, so the force (`∝ strain^{3/2}`) has a half-maximum width of
 #    `(10/√10) arccos(2^{-1/6}) = 1.488` beads;
