@@ -108,7 +108,7 @@ def run_case(n: int, regime: str, ladder, grid, quick: bool) -> dict:
                 # a few-ms solve on a shared machine: bursts of 1.5x are common, so more repeats
                 # (capped by median_time's 3 s budget) than for the 0.1-1 s scipy solves
                 r["time"] = dc.time_launch(solver, r["rtol"], ms, reps if quick else 25)
-                if r["rtol"] == COMMON_RTOL:
+                if r["rtol"] == COMMON_RTOL and not quick:  # quick: no second compile per method
                     r["time_simulate"] = dc.time_simulate(solver, r["rtol"], r["max_steps"], reps)
         out["methods"][solver] = dict(kind="diffrax", ladder=rungs, matched=m)
 
@@ -161,7 +161,8 @@ def batch_bench(sizes, quick: bool) -> dict:
     tol = hc.Tolerances()  # the library default (rtol = atol = 1e-10, onset proxy on)
     big_s, big_x = _designs(max(sizes))
     pilot = hc.simulate_batch(big_s, big_x, tolerances=tol, max_steps=4096)
-    ms = 1 << int(math.ceil(math.log2(1.25 * int(pilot.num_steps.max()))))  # smallest power of 2 with headroom
+    # smallest power of 2 with headroom (quick: the pilot's own budget, so that nothing compiles again)
+    ms = 4096 if quick else 1 << int(math.ceil(math.log2(1.25 * int(pilot.num_steps.max()))))
     ndev = jax.local_device_count()
     rows = []
 
@@ -235,12 +236,12 @@ def grad_bench(sizes, quick: bool) -> list[dict]:
             g_d = g_r * math.nan if quick else np.asarray(grad_dfx(m0))
             g_f = g_r * math.nan if quick else np.asarray(jacf(m0))
             fd = []  # central differences of the reference solve (independent check of the accuracy)
-            for i in range(n):
+            for i in range(0 if quick else n):  # quick: not compiled (tests/test_gradients.py checks it)
                 h = 1e-4 * float(m0[i])
                 e = jnp.zeros(n).at[i].set(h)
                 fd.append((float(ref(m0 + e)) - float(ref(m0 - e))) / (2 * h))
-            fd = np.asarray(fd)
-            scale = np.max(np.abs(fd))
+            fd = np.asarray(fd) if fd else g_r * math.nan
+            scale = np.max(np.abs(fd)) if not quick else np.max(np.abs(g_r))
             rows.append(dict(regime=regime, n=n, steps=probe.num_steps, max_steps=ms, forward_ms=1e3 * t_fwd,
                              grad_ms=1e3 * t_grad, jacfwd_ms=1e3 * t_jacf, grad_ratio=t_grad / t_fwd,
                              diffrax_grad_ms=1e3 * t_dfx, diffrax_grad_ratio=t_dfx / t_fwd,

@@ -1,8 +1,9 @@
 """CI smoke run of the benchmark suite (`benchmarks/run.py --quick`): structure only, no timing assertions.
 
 The quick run integrates one case (n = 2, gapped Tsuji stack) with diffrax Tsit5/Dopri8/Kvaerno5 and scipy
-DOP853/Radau/LSODA on a three-rung tolerance ladder, one batch size, one gradient (without the comparisons that need another compile, which `make bench` and
-tests/test_gradients.py do), and writes the Markdown
+DOP853/Radau/LSODA on a three-rung tolerance ladder, one batch size, one gradient (without the comparisons that need another compile: `simulate()` timings,
+diffrax's own reverse mode and central differences, which `make bench` and tests/test_gradients.py do),
+and writes the Markdown
 table and the raw JSON. Expected numbers below come from independent references: the rigid-body gain of
 paper Eq 19 (exact for widely gapped contacts with velocity-independent restitution) and scipy's DOP853
 on the same vector field.
@@ -81,8 +82,9 @@ def test_batch_grad_and_targets_structure(quick_run):
     assert row["simulate_batch_lean_ms"] == "nan"  # quick: not run (one compile fewer)
     (g,) = data["grads"]
     assert g["n"] == 2 and math.isfinite(g["grad_ratio"]) and g["grad_ratio"] > 0
-    # the discrete gradient is not error-controlled (Tsuji's delta^(1/4) onset): only check it is sane
-    assert g["rev_vs_fd_rel"] < 0.2
+    # quick: the central differences of a 1e-13 reference are not compiled (tests/test_gradients.py
+    # checks the gradient against finite differences; `make bench` reports it)
+    assert g["rev_vs_fd_rel"] == "nan"
     # quick: diffrax's own reverse mode is not compiled here; tests/test_gradients.py checks that it gives
     # the same discrete derivative (the full `make bench` reports it)
     assert g["diffrax_grad_ms"] == "nan"  # the JSON writes a non-finite number as text
