@@ -74,6 +74,7 @@ def to_dict(report: Report) -> dict:
     srs = report.top_srs
     status = report.status
     return {
+        "model": model_label(report),
         "status": status.text,
         "status_code": int(status),
         "partial": not status.ok,  # the headline numbers are not valid (incomplete, no contact, failed)
@@ -132,11 +133,25 @@ def _fmt(x, spec=".4f"):
 def _err(rigid, sim):
     if rigid is None or sim is None or not (math.isfinite(rigid) and math.isfinite(sim)) or sim <= 0:
         return ""  # no comparison with an undefined or non-positive (partial) gain
-    return f"  ({(rigid - sim) / sim:+.2%} vs Hertz)"
+    return f"  ({(rigid - sim) / sim:+.2%} vs compliant)"
+
+
+def model_label(report: Report) -> str:
+    """The model that was run, named by its contact laws: "compliant (tsuji)", "compliant (hertz,
+    kelvin-voigt)" (the laws' configuration names, `registry.LAWS`, in the order of the interfaces)."""
+    sol = report.solution
+    if sol is None:
+        return "compliant"
+    names = []
+    for idx, law in sorted(zip(sol.stack.groups, sol.stack.laws), key=lambda p: p[0][0]):
+        if law.name not in names:
+            names.append(law.name)
+    return f"compliant ({', '.join(names)})"
 
 
 def summary_table(report: Report, title: str | None = None) -> str:
-    """A readable summary: gains (Hertz vs rigid), e_eff per contact, the top pulse, the regime."""
+    """A readable summary: gains (the compliant model that was run, `model_label`, against the rigid
+    theory), e_eff per contact, the top pulse, the regime."""
     r = report
     lines = []
     if title:
@@ -154,7 +169,7 @@ def summary_table(report: Report, title: str | None = None) -> str:
                  f"({', '.join(f'{m:.4g}' for m in r.masses)} kg)")
     lines.append("")
     lines.append("top-mass velocity gain G_n = V_n / v_ff")
-    lines.append(f"  Hertz simulation                        {_fmt(r.top_velocity_gain)}")
+    lines.append(f"  {model_label(r):<40}{_fmt(r.top_velocity_gain)}")
     lines.append(f"  rigid, Eq 19 with nominal e             {_fmt(r.rigid.nominal_gain)}"
                  f"{_err(r.rigid.nominal_gain, r.top_velocity_gain)}")
     lines.append(f"  rigid, Eq 19 with measured e_eff        {_fmt(r.rigid.measured_restitution_gain)}"

@@ -49,6 +49,9 @@ def test_normative_example_json_contract(normative_json):
     # the top mass's one pulse takes it from -v_ff to G v_ff (Eq 19): delta V = (G + 1) v_ff, v_ff = 1 m/s
     assert d["top_pulse"]["delta_v_mps"] == pytest.approx(g + 1, rel=1e-6)
     assert d["energy_error"] < 1e-5
+    # the model that was run, named by its contact law (the file's [contact] law), not "Hertz" for every law
+    assert d["model"] == "compliant (tsuji)"
+    assert set(d["contacts"][0]) >= {"peak_force_time_s"} and len(d["peak_velocity_times_s"]) == 6
 
 
 def test_outputs_and_no_overwrite(tmp_path):
