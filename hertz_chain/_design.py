@@ -102,9 +102,10 @@ class DesignMap:
         self.interfaces = tuple(range(0 if self.ground else 1, n))
         self.contacts = {j: spec.contact_for(j) for j in self.interfaces}
         for j, cs in self.contacts.items():
-            if LAWS[cs.law].memory:
-                raise StackFileError(f"{section}: contact law {cs.law!r} (interface {j}) keeps a plastic memory; "
-                                     "optimize and sweep do not support elastic–plastic laws yet (simulate does)")
+            if LAWS[cs.law].memory or LAWS[cs.law].params:
+                why = "keeps a plastic memory" if LAWS[cs.law].memory else "has further parameters"
+                raise StackFileError(f"{section}: contact law {cs.law!r} (interface {j}) {why}; optimize and "
+                                     "sweep do not support it yet (simulate does)")
         k = np.full(n, math.nan)
         for j, cs in self.contacts.items():
             k[j] = _stiffness(spec, cs, j, n)

@@ -46,6 +46,7 @@ __all__ = [
     "KelvinVoigt",
     "Viscoelastic",
     "HertzDashpot",
+    "PowerLaw",
     "Thornton",
     "LAW_NAMES",
     "make_law",
@@ -514,6 +515,58 @@ class HertzDashpot(_HertzianElastic):
         return jnp.where(mask, self.gamma * delta_dot, 0.0)
 
 
+class PowerLaw(AbstractContactLaw):
+    """A power law with Hunt–Crossley damping of the same exponent, ``F = k delta^p (1 + alpha delta_dot)``
+    (``p >= 1``; ``alpha = 0``: elastic). ``p = 3/2`` is Hertz (``HuntCrossley``), ``p = 1`` the linear
+    spring, other ``p`` model conforming or rough contacts and the general granular-chain laws (Nesterenko
+    2001, Ch. 1). ``k`` in N/m^p.
+
+    The restitution depends on ``chi = alpha v`` alone, whatever ``p`` and ``k``: the exact map of
+    Carvalho & Martins (2019), Mech. Mach. Theory 139, 1, holds for any exponent
+    (`calibration.restitution_from_chi`), so ``from_config`` calibrates ``alpha = chi(e) / v_c`` exactly.
+    """
+
+    name: ClassVar[str] = "power"
+    k: Array
+    p: Array
+    alpha: Array
+    clamp: bool = eqx.field(static=True, default=True)
+
+    def __init__(self, k: ArrayLike, p: ArrayLike, alpha: ArrayLike = 0.0, clamp: bool = True):
+        self.k = jnp.asarray(k, dtype=float)
+        self.p = jnp.asarray(p, dtype=float)
+        self.alpha = jnp.asarray(alpha, dtype=float)
+        self.clamp = clamp
+
+    @classmethod
+    def from_config(cls, k, *, restitution=None, damping=None, effective_mass=None, calibration_velocity=None,
+                    chi_map="exact", clamp=True, exponent=None) -> "PowerLaw":
+        """`make_law`'s constructor: ``exponent`` p, and ``alpha = damping`` or calibrated to
+        ``restitution`` at ``calibration_velocity`` with ``chi_map``."""
+        p = float(_require(exponent, "exponent", cls.name))
+        if not (math.isfinite(p) and p >= 1.0):
+            raise ParameterError("exponent", exponent, "a finite number >= 1")
+        if restitution is None:
+            return cls(_stiffness(k), p, damping, clamp)
+        v = _positive(_require(calibration_velocity, "calibration_velocity", cls.name), "calibration_velocity")
+        return cls(_stiffness(k), p, _cal.hunt_crossley_alpha(restitution, v, chi_map), clamp)
+
+    def elastic_force(self, delta: ArrayLike) -> Array:
+        mask, d = _positive_part(delta)
+        return jnp.where(mask, self.k * jnp.power(d, self.p), 0.0)
+
+    def potential(self, delta: ArrayLike) -> Array:
+        mask, d = _positive_part(delta)
+        return jnp.where(mask, self.k * jnp.power(d, self.p + 1.0) / (self.p + 1.0), 0.0)
+
+    def damping_force(self, delta: ArrayLike, delta_dot: ArrayLike) -> Array:
+        return self.elastic_force(delta) * self.alpha * delta_dot
+
+    def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
+        """Exact ``e(chi = alpha v)`` (any ``p``, ``k``, ``m*``)."""
+        return _cal.hunt_crossley_restitution(np.asarray(self.alpha), _velocity(impact_velocity))
+
+
 class Thornton(AbstractContactLaw):
     """Elastic–perfectly plastic contact of Thornton (1997), "Coefficient of restitution for collinear
     collisions of elastic-perfectly plastic spheres", J. Appl. Mech. 64, 383.
@@ -712,6 +765,7 @@ def make_law(
     clamp: bool = True,
     yield_pressure: float | None = None,
     effective_radius: float | None = None,
+    exponent: float | None = None,
 ) -> AbstractContactLaw:
     """Build a contact law from its configuration name (the one factory of the stack-file reader).
 
@@ -730,6 +784,7 @@ def make_law(
       | ``kelvin-voigt`` | ``damping`` (= c, N s/m) | ``effective_mass`` |
       | ``viscoelastic`` | ``A`` or ``damping`` (= A, s) | ``effective_mass``, ``calibration_velocity`` |
       | ``hertz-dashpot`` | ``damping`` (= gamma, N s/m) | ``effective_mass``, ``calibration_velocity`` |
+      | ``power`` | ``alpha`` (s/m); always ``exponent`` p >= 1 (stiffness in N/m^p) | ``calibration_velocity``; ``chi_map`` |
       | ``thornton`` | ``yield_pressure`` (Pa) and ``effective_radius`` (m); no ``restitution`` | — |
 
       ``e`` is reproduced exactly (to ~1e-11) in the isolated impact, with or without the clamp
@@ -771,7 +826,7 @@ def make_law(
     if e is not None and own_given:
         raise ParameterError(own_given[0][0], own_given[0][1],
                              "give either restitution or the law's own damping parameter, not both")
-    extra = {"yield_pressure": yield_pressure, "effective_radius": effective_radius}
+    extra = {"yield_pressure": yield_pressure, "effective_radius": effective_radius, "exponent": exponent}
     wanted = {key for key, _ in row.params} | ({"effective_radius"} if row.needs_radius else set())
     for key, value in extra.items():
         if value is not None and key not in wanted and key != "effective_radius":

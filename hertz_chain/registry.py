@@ -114,6 +114,9 @@ LAWS: dict[str, LawRow] = {row.name: row for row in (
            damping_label="A, s", aliases=("A",), speed_dependent=True, needs_effective_mass=True),
     LawRow("hertz-dashpot", "HertzDashpot", damping="damping", damping_dimension="viscous_damping",
            damping_max=1e9, damping_label="gamma, N s/m", speed_dependent=True, needs_effective_mass=True),
+    LawRow("power", "PowerLaw", stiffness="power_stiffness", damping="alpha", damping_dimension="inverse_velocity",
+           damping_max=1e6, damping_label="alpha, s/m", speed_dependent=True, chi_map=True,
+           params=(("exponent", "dimensionless"),)),
     LawRow("thornton", "Thornton", memory=True, params=(("yield_pressure", "pressure"),), needs_radius=True),
 )}
 """Contact laws by configuration name (see `LawRow`)."""

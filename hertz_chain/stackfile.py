@@ -97,6 +97,7 @@ LIMITS = {
     "density": (0.0, 1e5),
     "hertz_stiffness": (0.0, 1e15),
     "linear_stiffness": (0.0, 1e15),
+    "power_stiffness": (0.0, 1e18),
     "viscous_damping": (0.0, 1e9),
     "inverse_velocity": (0.0, 1e6),
     "force": (0.0, 1e12),
@@ -107,6 +108,7 @@ naming the key; 0 is left to each key's own sign rule (a mass must still be > 0)
 
 _UNITS = {"mass": "kg", "length": "m", "time": "s", "velocity": "m/s", "acceleration": "m/s^2",
           "pressure": "Pa", "density": "kg/m^3", "hertz_stiffness": "N/m^1.5", "linear_stiffness": "N/m",
+          "power_stiffness": "N/m^p",
           "viscous_damping": "N s/m", "inverse_velocity": "s/m", "force": "N", "frequency": "Hz"}
 
 # the vocabularies: one table each in `hertz_chain.registry`
@@ -159,6 +161,7 @@ _DIMENSIONS = {
     "linear_stiffness": ("N/m", "a linear stiffness in N/m (e.g. '5e7 N/m')"),
     "viscous_damping": ("N*s/m", "a damping coefficient in N s/m (e.g. '50 N*s/m')"),
     "inverse_velocity": ("s/m", "an inverse velocity in s/m (e.g. '0.3 s/m')"),
+    "power_stiffness": ("N/m^p", "a stiffness in N/m^p, p the law's exponent (e.g. '1e8 N/m^1.2' for p = 1.2)"),
 }
 
 
@@ -435,11 +438,14 @@ def _dimensionality(dim: str):
     return _ureg().Quantity(1, _DIMENSIONS[dim][0]).dimensionality
 
 
-def parse_quantity(raw: Any, dim: str, key: str = "value", *, allow_inf: bool = False) -> float:
+def parse_quantity(raw: Any, dim: str, key: str = "value", *, allow_inf: bool = False,
+                   exponent: float | None = None) -> float:
     """Convert `raw` (a pint string such as `"1 cm"`, a bare SI number, or a pint Quantity) to an
     SI float of dimension `dim` (a key of the dimension table: `"length"`, `"mass"`, `"time"`,
     `"velocity"`, `"acceleration"`, `"pressure"`, `"density"`, `"hertz_stiffness"`,
     `"linear_stiffness"`, `"viscous_damping"`, `"inverse_velocity"`, `"dimensionless"`).
+
+    `"power_stiffness"` (N/m^p) needs the law's `exponent` p.
 
     Raises `StackFileError` naming `key` for the wrong dimension, an unparseable string, a
     non-number or a non-finite value (`inf` is allowed with `allow_inf`).
@@ -465,7 +471,8 @@ def parse_quantity(raw: Any, dim: str, key: str = "value", *, allow_inf: bool = 
             value = q
         elif str(q.units) == "dimensionless":  # no units at all ("0.5"): SI, like a bare number
             value = q.magnitude
-        elif q.dimensionality != _dimensionality(dim):
+        elif q.dimensionality != (_dimensionality(dim) if dim != "power_stiffness"
+                                  else _ureg().Quantity(1, f"N/m**{exponent!r}").dimensionality):
             shown = _show(raw) if isinstance(raw, str) else repr(str(q))
             raise _error(key, f"{shown} has units of {q.units}, expected {desc}")
         else:
@@ -649,9 +656,20 @@ def _resolve_contact(merged: dict, label: str, *, ground: bool) -> ContactSpec:
         return merged[k] if k in merged else (None, None)
 
     stiffness = None
+    exponent = None
+    if "exponent" in merged and ("exponent", "dimensionless") in row.params:  # the power law: its stiffness unit
+        raw, key = merged["exponent"]
+        exponent = parse_quantity(raw, "dimensionless", key)
+        _check(1.0 <= exponent <= 5.0, key, raw, "must be between 1 and 5 (F = k delta^p)")
     if "stiffness" in merged:
         raw, key = merged["stiffness"]
-        stiffness = _positive(raw, key, row.stiffness)
+        if row.stiffness == "power_stiffness":
+            if exponent is None:
+                raise _error(_join(label, "exponent"), f"missing; law {law!r} needs exponent (a plain number)")
+            stiffness = parse_quantity(raw, row.stiffness, key, exponent=exponent)
+            _check(stiffness > 0, key, raw, "must be > 0")
+        else:
+            stiffness = _positive(raw, key, row.stiffness)
     elif not row.hertzian:
         raise _error(
             _join(label, "stiffness"),
@@ -691,7 +709,7 @@ def _resolve_contact(merged: dict, label: str, *, ground: bool) -> ContactSpec:
         if pkey not in merged:
             raise _error(_join(label, pkey), f"missing; law {law!r} needs {pkey} ({_UNITS.get(dim, dim)})")
         raw, key = merged[pkey]
-        params.append((pkey, _positive(raw, key, dim)))
+        params.append((pkey, exponent if pkey == "exponent" else _positive(raw, key, dim)))
 
     if row.damping is not None:
         given = [k for k in ("restitution", "alpha", "damping") if k in merged]

@@ -57,6 +57,8 @@ laws = {
     "kelvin-voigt": hc.make_law("kelvin-voigt", stiffness=K_LIN, restitution=E, effective_mass=M),
     "viscoelastic": hc.make_law("viscoelastic", stiffness=K, restitution=E, effective_mass=M, calibration_velocity=VC),
     "hertz-dashpot": hc.make_law("hertz-dashpot", stiffness=K, restitution=E, effective_mass=M, calibration_velocity=VC),
+    # F = k delta^2 (1 + alpha delta_dot), k = 6.26e10 N/m^2: the elastic contact time at 1 m/s is about Hertz's
+    "power": hc.make_law("power", stiffness=6.26e10, exponent=2.0, restitution=E, calibration_velocity=VC),
 }
 
 
@@ -71,6 +73,7 @@ def thornton_e(r):
 R_Y = brentq(lambda r: thornton_e(r) - E, 1e-6, 1.0)
 DELTA_Y = (1.25 * M * (R_Y * VC) ** 2 / K) ** 0.4
 laws["thornton"] = hc.Thornton(K, DELTA_Y)
+laws = {name: laws[name] for name in hc.LAW_NAMES if name in laws}  # the registry's order
 assert tuple(laws) == hc.LAW_NAMES  # every law of the package
 print(f"Hertz contact time at 1 m/s: {TC_HERTZ * 1e3:.4f} ms; k_lin = {K_LIN:.4e} N/m")
 
@@ -99,6 +102,7 @@ e_ref = {
     "hertz-dashpot": np.array([calibration.hertz_dashpot_restitution(float(laws["hertz-dashpot"].gamma)
                                                                      * M**-0.6 * K**-0.4 * v**-0.2) for v in vs]),
     "thornton": thornton_e(R_Y * VC / vs),
+    "power": calibration.hunt_crossley_restitution(float(laws["power"].alpha), vs),  # exact map, any exponent
 }
 for name in laws:
     dev = np.max(np.abs(e_sim[name] - e_ref[name]))
@@ -126,7 +130,8 @@ curves = {"hertz": np.ones_like(vfine), "hunt-crossley": calibration.hunt_crossl
           "tsuji": np.full_like(vfine, E), "kelvin-voigt": np.full_like(vfine, E),
           "viscoelastic": calibration.viscoelastic_restitution_pade(xf),
           "hertz-dashpot": np.interp(np.log(vfine), np.log(vs), e_ref["hertz-dashpot"]),
-          "thornton": thornton_e(R_Y * VC / vfine)}
+          "thornton": thornton_e(R_Y * VC / vfine),
+          "power": calibration.hunt_crossley_restitution(float(laws["power"].alpha), vfine)}
 for i, name in enumerate(laws):
     ax.semilogx(vfine, curves[name], color=f"C{i}", lw=1, ls="--" if name == "kelvin-voigt" else "-")
     ax.semilogx(vs, e_sim[name], "o", color=f"C{i}", ms=5, label=f"{name} (simulated)")

@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+import hertz_chain as hc
+from hertz_chain import calibration
 from hertz_chain.calibration import HERTZ_CONTACT_TIME_FACTOR, hertz_impact
 from hertz_chain.contact import (
     LAW_NAMES,
@@ -15,6 +17,7 @@ from hertz_chain.contact import (
     HuntCrossley,
     HertzDashpot,
     KelvinVoigt,
+    PowerLaw,
     Thornton,
     Tsuji,
     Viscoelastic,
@@ -99,8 +102,30 @@ def test_clamp_switch():
 
 
 def test_names():
-    assert [c.name for c in (Hertz, HuntCrossley, Tsuji, KelvinVoigt, Viscoelastic, HertzDashpot, Thornton)] \
-        == list(LAW_NAMES)
+    assert [c.name for c in (Hertz, HuntCrossley, Tsuji, KelvinVoigt, Viscoelastic, HertzDashpot, PowerLaw,
+                             Thornton)] == list(LAW_NAMES)
+
+
+@pytest.mark.parametrize("p", [1.2, 2.0])
+def test_power_law_contact_time_and_restitution(p):
+    """F = k delta^p: the elastic impact lasts t_c = (2/(p+1)) B(1/(p+1), 1/2) delta_m / v with
+    delta_m = ((p+1) m v^2 / (2k))^(1/(p+1)) (energy integral, written out here); with Hunt–Crossley damping
+    of the same exponent the restitution is the exact map e(chi = alpha v), for any p (Carvalho & Martins
+    2019), measured by the simulator at two speeds."""
+    from scipy.special import beta
+
+    m, k, v = 0.2, 1e8, 1.3
+    d_m = ((p + 1) * m * v**2 / (2 * k)) ** (1 / (p + 1))
+    t_c = 2 / (p + 1) * beta(1 / (p + 1), 0.5) * d_m / v
+    res = hc.restitution(PowerLaw(k, p), v, m, tolerances=hc.Tolerances(rtol=1e-11, atol=1e-11))
+    assert res.e == pytest.approx(1.0, abs=1e-9)
+    assert res.contact_time == pytest.approx(t_c, rel=1e-7)
+    assert res.max_overlap == pytest.approx(d_m, rel=1e-8)
+    law = make_law("power", stiffness=k, exponent=p, restitution=0.7, calibration_velocity=1.0)
+    for speed in (1.0, 2.5):
+        e = hc.restitution(law, speed, m, tolerances=hc.Tolerances(rtol=1e-11, atol=1e-11)).e
+        assert e == pytest.approx(float(calibration.hunt_crossley_restitution(float(law.alpha), speed)), abs=1e-8)
+    assert float(law.restitution_at(1.0)) == pytest.approx(0.7, abs=1e-10)
 
 
 @pytest.mark.parametrize("v", [0.5, 1.0, 2.0])

@@ -51,7 +51,7 @@ def _law_lines(row: registry.LawRow, e: float | None) -> str:
     lines = [f'law = "{row.name}"', f'stiffness = "{stiffness}"']
     if e is not None and row.damping is not None:
         lines.append(f"restitution = {e}")
-    values = {"pressure": '"2 GPa"'}  # a row's further keys (`LawRow.params`), by dimension
+    values = {"pressure": '"2 GPa"', "dimensionless": "1.5"}  # a row's further keys (`LawRow.params`)
     lines += [f"{key} = {values[dim]}" for key, dim in row.params]
     return "\n".join(lines)
 
