@@ -382,7 +382,24 @@ class KelvinVoigt(AbstractContactLaw):
         return jnp.where(mask, self.c * delta_dot, 0.0)
 
 
-class Viscoelastic(_HertzianElastic):
+class _SpeedAndMassCalibrated(_HertzianElastic):
+    """A Hertzian law with one damping parameter whose restitution depends on the impact speed and the
+    effective mass (`Viscoelastic`, `HertzDashpot`): `make_law` builds it from its raw parameter, or
+    calibrates it with its `from_restitution(k, e, m_eff, v_c, clamp)`."""
+
+    @classmethod
+    def from_config(cls, k, *, restitution=None, damping=None, effective_mass=None, calibration_velocity=None,
+                    chi_map="exact", clamp=True):
+        """`make_law`'s constructor: the raw ``damping``, or calibrated to ``restitution`` at
+        ``calibration_velocity`` (needs ``effective_mass``)."""
+        if restitution is None:
+            return cls(_stiffness(k), damping, clamp)
+        m = _positive(_require(effective_mass, "effective_mass", cls.name), "effective_mass")
+        v = _positive(_require(calibration_velocity, "calibration_velocity", cls.name), "calibration_velocity")
+        return cls.from_restitution(k, restitution, m, v, clamp)
+
+
+class Viscoelastic(_SpeedAndMassCalibrated):
     """Viscoelastic Hertz contact, ``F = k (delta^{3/2} + (3/2) A sqrt(delta) delta_dot)``.
 
     Brilliantov, Spahn, Hertzsch & Pöschel (1996), Phys. Rev. E 53, 5382. ``A`` (s) is the
@@ -418,17 +435,6 @@ class Viscoelastic(_HertzianElastic):
         return cls(k, _cal.viscoelastic_A_from_xi(xi, k, m, v), clamp)
 
     @classmethod
-    def from_config(cls, k, *, restitution=None, damping=None, effective_mass=None, calibration_velocity=None,
-                    chi_map="exact", clamp=True) -> "Viscoelastic":
-        """`make_law`'s constructor: ``A = damping``, or calibrated to ``restitution`` at
-        ``calibration_velocity`` (needs ``effective_mass``)."""
-        if restitution is None:
-            return cls(_stiffness(k), damping, clamp)
-        m = _positive(_require(effective_mass, "effective_mass", cls.name), "effective_mass")
-        v = _positive(_require(calibration_velocity, "calibration_velocity", cls.name), "calibration_velocity")
-        return cls.from_restitution(k, restitution, m, v, clamp)
-
-    @classmethod
     def dimensionless_damping(cls, restitution, *, chi_map="exact", clamp=True) -> float:
         """``xi(e, clamp)`` (`calibration.viscoelastic_xi`)."""
         return _cal.viscoelastic_xi(restitution, clamp)
@@ -451,7 +457,7 @@ class Viscoelastic(_HertzianElastic):
         return jnp.where(mask, 1.5 * self.k * self.A * jnp.sqrt(d) * delta_dot, 0.0)
 
 
-class HertzDashpot(_HertzianElastic):
+class HertzDashpot(_SpeedAndMassCalibrated):
     """Hertz with a linear dashpot, ``F = k delta^{3/2} + gamma delta_dot`` (gamma in N s/m): the model
     of dissipative granular chains of Rosas, Romero, Nesterenko & Lindenberg (2007), "Observation of
     two-wave structure in strongly nonlinear dissipative granular chains", Phys. Rev. Lett. 99, 164301.
@@ -481,17 +487,6 @@ class HertzDashpot(_HertzianElastic):
         k, m = _stiffness(k), _positive(m_eff, "effective_mass")
         v = _positive(calibration_velocity, "calibration_velocity")
         return cls(k, _cal.hertz_dashpot_zeta(restitution, clamp) * m**0.6 * k**0.4 * v**0.2, clamp)
-
-    @classmethod
-    def from_config(cls, k, *, restitution=None, damping=None, effective_mass=None, calibration_velocity=None,
-                    chi_map="exact", clamp=True) -> "HertzDashpot":
-        """`make_law`'s constructor: ``gamma = damping``, or calibrated to ``restitution`` at
-        ``calibration_velocity`` (needs ``effective_mass``)."""
-        if restitution is None:
-            return cls(_stiffness(k), damping, clamp)
-        m = _positive(_require(effective_mass, "effective_mass", cls.name), "effective_mass")
-        v = _positive(_require(calibration_velocity, "calibration_velocity", cls.name), "calibration_velocity")
-        return cls.from_restitution(k, restitution, m, v, clamp)
 
     @classmethod
     def dimensionless_damping(cls, restitution, *, chi_map="exact", clamp=True) -> float:
