@@ -141,11 +141,6 @@ def parabolic_peak(t, y, i0, i1) -> tuple[float, float]:
     return float(tv), float(y1 + a * (tv - t1) ** 2 + (2 * a * t1 + b) * (tv - t1))
 
 
-def _refined_max(t, y, dy, i0, i1) -> float:
-    """Maximum of the Hermite interpolant of ``y`` around its largest sample in ``[i0, i1]``."""
-    return refined_peak(t, y, dy, i0, i1)[1]
-
-
 def _free_side_release(ta, ya, da, aa, tb, sep) -> tuple[float, float] | None:
     """Where a contact let go: the last zero of ``sep(delta(s), delta_dot(s))`` along the free flight
     ``delta = ya + da s + aa s^2/2`` extrapolated back from the open point ``ta`` towards the last closed
@@ -274,7 +269,7 @@ def contact_episodes(
                     interface=int(j),
                     start=float(t_start),
                     end=float(t_end),
-                    max_overlap=_refined_max(t, d[:, j], r[:, j], i0, i1),
+                    max_overlap=refined_peak(t, d[:, j], r[:, j], i0, i1)[1],
                     peak_force=float(f[run, j].max()),
                     peak_force_time=parabolic_peak(t, f[:, j], i0, i1)[0],
                     approach_velocity=float(v_in),
