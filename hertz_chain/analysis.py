@@ -7,7 +7,9 @@
 - the **acceleration pulse** of every mass (`hertz_chain.pulse`), as an accelerometer fixed to the mass
   reads it: the contact acceleration `a + g` (zero in free fall), in m/s² and g;
 - the **shock response spectrum** of the top mass's pulse (`hertz_chain.srs`: maximax absolute
-  acceleration, Q = 10, 1/12 octave, Smallwood ramp-invariant filter, ISO 18431-4);
+  acceleration, Q = 10, 1/12 octave, Smallwood ramp-invariant filter, ISO 18431-4): of the top mass's
+  own contact (the interface below it), over a band that covers at least 100 Hz-10 kHz and
+  `[0.1/D, 20/D]` (D the pulse's 10 % duration), on the dense solution where the steps are coarse;
 - the **velocity amplification**: the launch velocity of every mass over the drop speed, and the top
   mass's kinetic-energy transfer efficiency `K_n` (paper Section 2.1: its kinetic energy after the
   cascade over the stack's kinetic energy at impact);
@@ -30,12 +32,13 @@ import warnings
 
 import numpy as np
 
-from .episodes import ContactEpisode, contact_episodes, refined_peak
+from .episodes import ContactEpisode, contact_episodes, hermite_slope, refined_peak
 from .errors import HertzChainError, ParameterError, SolverError
 from .pulse import G0, PulseMetrics, pulse_metrics
 from .rigid import chain_gain, stack_gain
 from .rigid_events import simulate_rigid
-from .srs import ShockResponseSpectrum, srs
+from .srs import (DEFAULT_PPC, ShockResponseSpectrum, _active_sample_rate, octave_frequencies,
+                  resample_uniform, srs)
 from .status import Status
 
 __all__ = ["INDEPENDENT_BELOW", "RigidComparison", "Report", "analyse", "independence"]
@@ -221,7 +224,18 @@ def _pulse(t, a, v) -> PulseMetrics | None:
         return None  # e.g. a mass that never felt a contact
 
 
-def _top_srs(t, a_g, episodes, top_if) -> ShockResponseSpectrum | None:
+#: The top SRS's band always covers at least this (Hz): the shock-test standards' usual 100 Hz-10 kHz.
+SRS_BAND_HZ = (100.0, 10_000.0)
+
+
+def _top_srs(t, a_g, v_g, episodes, top_if) -> ShockResponseSpectrum | None:
+    """Maximax SRS (Q = 10, 1/12 octave) of the top mass's own contact (`top_if`: the interface below
+    it), over `[min(100 Hz, 0.1/D), max(10 kHz, 20/D)]` (D: the pulse's 10 % duration). `a_g`, `v_g`:
+    the accelerometer's acceleration and its running integral, in g and g·s. When the solver's steps
+    sample the pulse more coarsely than 50 points per cycle at the top of the band, the filter runs on
+    the dense solution instead: the slope of the cubic Hermite interpolant of the velocity with the
+    acceleration (`episodes.hermite_slope`), not on straight lines between steps; the band is never
+    narrowed to what the steps resolve."""
     eps = [ep for ep in episodes if ep.interface in top_if]
     if not eps:
         return None
@@ -230,10 +244,20 @@ def _top_srs(t, a_g, episodes, top_if) -> ShockResponseSpectrum | None:
     keep = (t >= t0 - pad) & (t <= t1 + pad)
     if keep.sum() < 4:
         return None
+    tk, ak = t[keep], a_g[keep]
     try:
+        duration = pulse_metrics(tk, ak).duration_10
+        step = 2.0 ** (1 / 12) * (1 + 1e-12)  # one grid point at or beyond each end of the band
+        freqs = octave_frequencies(min(SRS_BAND_HZ[0], 0.1 / duration) / step, max(SRS_BAND_HZ[1], 20.0 / duration) * step)
+        t_end = float(tk[tk <= t1][-1])
+        rate = DEFAULT_PPC * freqs[-1]
+        if _active_sample_rate(tk, ak) < rate:  # too coarse: the dense solution, t_end kept on the grid
+            tk, _, _ = resample_uniform(tk, ak, rate, anchor=t_end)
+            tk = np.minimum(tk, t[keep][-1])
+            ak = hermite_slope(t[keep], v_g[keep], a_g[keep], tk)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            return srs(t[keep], a_g[keep], on_coarse="ignore", pulse_end=float(t[keep][t[keep] <= t1][-1]))
+            return srs(tk, ak, freqs, on_coarse="ignore", pulse_end=t_end)
     except HertzChainError:
         return None
 
@@ -293,9 +317,10 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
         return st.t < min(starts) if starts else np.ones(st.t.shape, dtype=bool)
 
     pulses = tuple(_pulse(st.t[cut(i)], a_contact[cut(i), i], v_contact[cut(i), i]) for i in range(n))
-    top_if = {n - 1} | ({n - 2} if n >= 2 and (n - 2 >= 1 or ground) else set())
+    # the top mass's own contact only: interface n - 1 (its neighbour below, or the ground when n = 1)
+    top_if = {n - 1} if (n >= 2 or ground) else set()
     keep = cut(n - 1)
-    top_srs = _top_srs(st.t[keep], a_contact[keep, -1] / G0, episodes, top_if)
+    top_srs = _top_srs(st.t[keep], a_contact[keep, -1] / G0, v_contact[keep, -1] / G0, episodes, top_if)
     ind = independence(episodes, interfaces)
     rigid = _rigid_comparison(sol, e_meas, nominal_restitution, v_ref)
     regime = "independent" if ind < INDEPENDENT_BELOW else "overlapping"
