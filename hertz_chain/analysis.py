@@ -418,3 +418,25 @@ def _separation(stack, memory=None):
         return np.asarray(stack.separation_function(d, r, q))[:, j]
 
     return fn
+
+
+def accelerometer(report: Report, t, mass: int = -1) -> np.ndarray:
+    """What an accelerometer fixed to `mass` (default: the top mass) reads at the times `t`, in m/s²:
+    the contact acceleration `a + g` (zero in free fall) of the simulated run, on the dense solution
+    (the slope of the cubic Hermite interpolant of `v + g t` with `a + g` at the solver's steps,
+    `episodes.hermite_slope`; exact at the steps, error O(h^3) between them).
+
+    **Raises:** `ParameterError` for a report without its solution, or times outside the run.
+    """
+    sol = report.solution
+    st = None if sol is None else sol.steps
+    if st is None:
+        raise ParameterError("report", "without its solution", "a Report from analyse() of a simulated run")
+    g = float(sol.stack.gravity)
+    ts = np.asarray(st.t, dtype=float)
+    t = np.asarray(t, dtype=float)
+    if t.size and not (ts[0] <= t.min() and t.max() <= ts[-1]):
+        raise ParameterError("t", f"[{t.min():.6g}, {t.max():.6g}] s", f"times inside the run, [{ts[0]:.6g}, {ts[-1]:.6g}] s")
+    v = np.asarray(st.velocities, dtype=float)[:, mass] + g * ts
+    a = np.asarray(st.accelerations, dtype=float)[:, mass] + g
+    return hermite_slope(ts, v, a, t)

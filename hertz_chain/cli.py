@@ -10,6 +10,10 @@ Commands:
 - `hertz-chain sweep STACK.toml --output OUT.zarr [--workers N | --scheduler ADDR] [--resume] [--json]` —
   a design space into a Zarr store that survives a kill (`hertz_chain.sweep`).
 - `hertz-chain plot OUT.zarr --x KEY [--y KEY] [--var NAME] --output F.png` — a line or a map from a sweep.
+- `hertz-chain check STACK.toml [--standard NAME] [--json] [--plot F.png]` — the top pulse against a
+  shock-test condition (`hertz_chain.standards`; exit 1 when a criterion fails); `--standard list`.
+- `hertz-chain compare STACK.toml MEASURED.csv [--cfc N] [--align xcorr|onset|none] [--json] [--plot F.png]`
+  — the top pulse against a measured one (`hertz_chain.measured`).
 - `hertz-chain demo` — the paper's optimal six-mass MVG stack, gapped and touching.
 
 Every user error (bad file, bad parameter, bad path, unknown command or flag, missing argument) prints
@@ -24,7 +28,8 @@ Exit status (`hertz_chain.status.Status.exit_code`):
 
 | status | meaning |
 |---|---|
-| 0 | the run completed (`complete`, `complete with rebounds`); `--help` |
+| 0 | the run completed (`complete`, `complete with rebounds`); `--help`; `check`: every criterion passed |
+| 1 | `check`: a criterion failed (the table/JSON says which, with its margin) |
 | 2 | bad input: a stack file, flag, value or output path refused before anything ran; a usage error |
 | 3 | incomplete: `t_max` or `max_steps` came before the cascade ended (partial results are written) |
 | 4 | no contact: nothing touched before `t_max` |
@@ -292,6 +297,115 @@ def sweep(
         counts = ", ".join(f"{k} {v}" for k, v in result.status_counts.items())
         typer.echo(f"{result.path}: {result.designs} designs; {result.computed} chunks computed, {result.skipped} "
                    f"already done{rate}; status: {counts}")
+
+
+EXIT_CHECK_FAILED = 1  # `check`: a judged criterion failed
+
+
+@app.command()
+def check(
+    stack_file: Optional[Path] = typer.Argument(None, help="Stack file; its [test] section or --standard says what to check."),
+    standard: Optional[str] = typer.Option(None, "--standard", help="A test condition (e.g. \"JESD22-B110 B\"); 'list' prints the table."),
+    as_json: bool = typer.Option(False, "--json", help="Print the result as JSON."),
+    plot: Optional[Path] = typer.Option(None, "--plot", help="Draw the pulse inside its band (PNG)."),
+    force: bool = typer.Option(False, "--force", help="Overwrite an existing plot."),
+) -> None:
+    """Check the top pulse against a shock-test condition: peak, duration, velocity change, band (exit 1 on FAIL)."""
+    from . import _paths
+    from .standards import read_test_file, standards_table
+
+    if standard is not None and standard.strip().lower() == "list":
+        typer.echo(standards_table())
+        return
+    try:
+        if stack_file is None:
+            _fail("STACK_FILE: missing; give a stack file (or --standard list for the table)")
+        if plot is not None:
+            _paths.check_output_path(plot, "--plot", PLOT_SUFFIXES, force)
+        from .stackfile import load_stack_file
+
+        load_stack_file(stack_file)
+        read_test_file(stack_file, standard)
+    except HertzChainError as exc:
+        _fail(str(exc))
+    from . import report
+    from .standards import check as run_check
+
+    try:
+        result_report, result = run_check(stack_file, standard)
+    except SolverError as exc:
+        typer.echo(f"hertz-chain: {Status.FAILED.text}: {_one_line(exc)}", err=True)
+        raise typer.Exit(code=Status.FAILED.exit_code)
+    except HertzChainError as exc:
+        _fail(str(exc))
+    typer.echo(report.to_json(result.to_dict()) if as_json else result.table())
+    if plot is not None:
+        from . import plot as plotting
+
+        try:
+            _paths.write_atomically(plot, lambda tmp: plotting.plot_check(result, tmp), force, "--plot")
+        except HertzChainError as exc:
+            _fail(str(exc))
+    status = result_report.status
+    if not status.ok:
+        typer.echo(f"hertz-chain: {status.text}: the run did not complete; the check is of a partial pulse", err=True)
+        raise typer.Exit(code=status.exit_code)
+    if not result.passed:
+        raise typer.Exit(code=EXIT_CHECK_FAILED)
+
+
+@app.command()
+def compare(
+    stack_file: Path = typer.Argument(..., help="Stack file whose top pulse is compared."),
+    measured: Path = typer.Argument(..., help="Measured pulse: CSV with a time and an acceleration column."),
+    time_unit: Optional[str] = typer.Option(None, "--time-unit", help="Unit of the time column (s, ms, us)."),
+    accel_unit: Optional[str] = typer.Option(None, "--accel-unit", help="Unit of the acceleration column (g, m/s^2)."),
+    cfc: Optional[int] = typer.Option(None, "--cfc", help="Filter both by SAE J211 / ISO 6487 class 60, 180, 600 or 1000."),
+    align: str = typer.Option("xcorr", "--align", help="Time alignment: xcorr, onset or none."),
+    as_json: bool = typer.Option(False, "--json", help="Print the comparison as JSON."),
+    plot: Optional[Path] = typer.Option(None, "--plot", help="Overlay the pulses and their SRS (PNG)."),
+    force: bool = typer.Option(False, "--force", help="Overwrite an existing plot."),
+) -> None:
+    """Compare the model's top pulse with a measured pulse: metrics, SRS and Sprague-Geers errors."""
+    from . import _paths
+    from .measured import ALIGNMENTS, read_pulse_csv
+    from .stackfile import load_stack_file
+
+    try:
+        if align not in ALIGNMENTS:
+            _fail(f"--align = {align!r} is invalid: one of {', '.join(ALIGNMENTS)}")
+        if cfc is not None:
+            from .filters import CFC_CLASSES
+
+            if cfc not in CFC_CLASSES:
+                _fail(f"--cfc = {cfc} is invalid: one of {', '.join(map(str, CFC_CLASSES))}")
+        if plot is not None:
+            _paths.check_output_path(plot, "--plot", PLOT_SUFFIXES, force)
+        spec = load_stack_file(stack_file)
+        record = read_pulse_csv(measured, time_unit=time_unit, accel_unit=accel_unit)
+    except HertzChainError as exc:
+        _fail(str(exc))
+    from . import report, workflow
+    from .measured import compare as run_compare
+
+    try:
+        result_report = workflow.run_spec(spec)
+        comparison = run_compare(result_report, record, cfc=cfc, align=align)
+    except SolverError as exc:
+        typer.echo(f"hertz-chain: {Status.FAILED.text}: {_one_line(exc)}", err=True)
+        raise typer.Exit(code=Status.FAILED.exit_code)
+    except HertzChainError as exc:
+        _fail(str(exc))
+    typer.echo(report.to_json(comparison.to_dict()) if as_json else report.compare_table(comparison))
+    if plot is not None:
+        from . import plot as plotting
+
+        try:
+            _paths.write_atomically(plot, lambda tmp: plotting.plot_compare(comparison, tmp), force, "--plot")
+        except HertzChainError as exc:
+            _fail(str(exc))
+    for note in comparison.notes:
+        typer.echo(f"hertz-chain: note: {_one_line(note)}", err=True)
 
 
 @app.command("plot")

@@ -9,7 +9,7 @@ import numpy as np
 from .analysis import Report
 from .pulse import G0
 
-__all__ = ["report_figure", "plot_report", "plot_optimize", "plot_sweep"]
+__all__ = ["report_figure", "plot_report", "plot_optimize", "plot_sweep", "plot_check", "plot_compare"]
 
 
 def report_figure(report: Report):
@@ -185,3 +185,63 @@ VARIABLE_NAMES = ("status", "top_velocity_gain", "velocity_gains", "rigid_gain",
 def _label(ds, name: str) -> str:
     units = ds[name].attrs.get("units", "")
     return f"{name} ({units})" if units and units != "1" else name
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_check(result, path: str | Path) -> None:
+    """The checked pulse inside its nominal pulse and band (`hertz_chain.standards.CheckResult`), in g
+    against ms from the nominal pulse's start, with the verdict of every criterion in the legend."""
+    from .standards import nominal_pulse
+
+    plt = _pyplot()
+    spec = result.spec
+    t = (result.t - result.nominal_start) * 1e3
+    a_g = result.a / G0
+    if a_g[np.argmax(np.abs(a_g))] < 0:
+        a_g = -a_g
+    nom = nominal_pulse(spec.shape, spec.peak_g, spec.duration, result.t - result.nominal_start)
+    fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
+    if spec.band is not None:
+        ax.fill_between(t, nom - spec.band * spec.peak_g, nom + spec.band * spec.peak_g, color="0.85",
+                        label=f"band ±{spec.band:g} A")
+    ax.plot(t, nom, "k--", lw=1, label=f"nominal {spec.shape}, {spec.peak_g:g} g, {spec.duration * 1e3:g} ms")
+    ax.plot(t, a_g, color="C3", lw=1.6, label="top pulse (model)")
+    for c in result.criteria:
+        if c.passed is not None:
+            ax.plot([], [], " ", label=f"{c.name}: {'pass' if c.passed else 'FAIL'} ({c.margin:+.3g} {c.unit})")
+    ax.grid(True, alpha=0.4)
+    ax.set(xlabel="time from the nominal pulse's start (ms)", ylabel="acceleration (g)",
+           title=f"{spec.name}: {'PASS' if result.passed else 'FAIL'}")
+    ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    fig.savefig(path, dpi=120, format="png")
+    plt.close(fig)
+
+
+def plot_compare(comparison, path: str | Path) -> None:
+    """Model against measurement (`hertz_chain.measured.Comparison`): the two pulses (g, ms) and their
+    SRS (log-log, decade ticks), with the Sprague–Geers errors in the title."""
+    plt = _pyplot()
+    c = comparison
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 4.8), constrained_layout=True)
+    ax.plot(c.t * 1e3, c.measured / G0, color="0.2", lw=1.2, label="measured")
+    ax.plot(c.t * 1e3, c.model / G0, color="C3", lw=1.2, label=f"model (shifted {c.shift * 1e3:+.4g} ms)")
+    ax.grid(True, alpha=0.4)
+    M, P, C = c.sprague_geers
+    ax.set(xlabel="time (ms)", ylabel="acceleration (g)",
+           title=f"Sprague–Geers M {M:+.3f}, P {P:.3f}, C {C:.3f}" + (f" (CFC {c.cfc})" if c.cfc else ""))
+    ax.legend(fontsize="small")
+    bx.loglog(c.srs_frequencies_Hz, c.measured_srs, color="0.2", label="measured")
+    bx.loglog(c.srs_frequencies_Hz, c.model_srs, color="C3", label="model")
+    bx.grid(True, which="both", alpha=0.4)
+    bx.set(xlabel="natural frequency (Hz)", ylabel="maximax SRS (g), Q = 10", title="Shock response spectra")
+    bx.legend(fontsize="small")
+    fig.savefig(path, dpi=120, format="png")
+    plt.close(fig)

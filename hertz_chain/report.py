@@ -364,3 +364,23 @@ def optimize_table(result) -> str:
     if c.get("why"):
         lines.append(f"  {c['why']}")
     return "\n".join(lines)
+
+
+def compare_table(c) -> str:
+    """Model against measurement (`hertz_chain.measured.Comparison`) as a text table."""
+    d = c.to_dict()
+    rows = [("peak", "g", "peak_g"), ("duration (10 %)", "ms", "duration_10_ms"),
+            ("equiv. half-sine", "ms", "equivalent_half_sine_ms"), ("rise time", "ms", "rise_time_ms"),
+            ("velocity change", "m/s", "delta_v_mps")]
+    out = [f"measured: {c.source}" + (f" (CFC {c.cfc})" if c.cfc else " (unfiltered)")
+           + f"; model shifted {c.shift * 1e3:+.5g} ms ({c.alignment})",
+           f"{'':<18} {'measured':>12} {'model':>12} {'difference':>11}"]
+    for label, unit, key in rows:
+        m, x, r = d["measured"][key], d["model"][key], d["relative_difference"][key]
+        out.append(f"{label + ' (' + unit + ')':<18} {m:>12.5g} {x:>12.5g} {'' if r is None else f'{100 * r:+.2f} %':>11}")
+    sg = d["sprague_geers"]
+    out.append(f"Sprague-Geers: magnitude {sg['magnitude']:+.4f}, phase {sg['phase']:.4f}, comprehensive "
+               f"{sg['comprehensive']:.4f}")
+    out.append(f"SRS (Q = 10, {c.srs_frequencies_Hz[0]:.4g}-{c.srs_frequencies_Hz[-1]:.4g} Hz): largest difference "
+               f"{d['srs']['max_abs_difference_dB']:.2f} dB")
+    return "\n".join(out)

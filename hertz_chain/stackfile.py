@@ -123,8 +123,9 @@ DAMPING_LIMITS = {name: (row.damping_max, f" {_UNITS[row.damping_dimension]}" if
 DESIGN_KINDS = ("mvg", "met")
 SHAPES = ("sphere", "flat")
 
-_TOP_KEYS = ("title", "drop", "stack", "ground", "contact", "materials", "solver", "optimize", "sweep")
-# `optimize` and `sweep` are read by `hertz_chain.optimize` and `hertz_chain.sweep` (docs/optimize.md,
+_TOP_KEYS = ("title", "drop", "stack", "ground", "contact", "materials", "solver", "optimize", "sweep", "test")
+# `optimize`, `sweep` and `test` are read by `hertz_chain.optimize`, `hertz_chain.sweep` and
+# `hertz_chain.standards` (docs/optimize.md, docs/lab-workflow.md,
 # docs/sweeps.md); simulating such a file runs its base stack
 _DROP_KEYS = ("ground", "impact_velocity", "height", "gravity")
 _STACK_KEYS = ("masses", "design", "gaps", "velocities", "preload", "material", "radius", "shape")
@@ -917,6 +918,8 @@ def _parse_stack(raw: Any, default_restitution: float | None) -> BodiesSpec:
         raise _error("stack.masses", "missing; give stack.masses (bottom first) or a [stack.design] section")
     n = len(masses) if masses is not None else design.n
 
+    if "gaps" not in t and n == 1:  # one mass: there is no gap to give
+        t = dict(t, gaps=())
     if "gaps" not in t:
         raise _error(
             "stack.gaps",

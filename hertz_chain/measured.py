@@ -1,0 +1,369 @@
+"""Measured pulses: read them, filter them, and compare them with the model (`hertz-chain compare`).
+
+- :func:`read_pulse_csv` reads a time column and an acceleration column, with units from the header
+  (`time (ms), acceleration (g)`, `t [s]; a [m/s^2]`, or a name ending in `_ms`, `_g`, ...) or from
+  the caller (`time_unit=`, `accel_unit=`, the command line's `--time-unit`/`--accel-unit`).
+- :func:`compare` puts the stack's top pulse and the measurement side by side: the same channel filter
+  on both (a CFC of SAE J211-1 / ISO 6487, `hertz_chain.filters`), one time alignment (cross-correlation,
+  the pulse onset, or none), the pulse metrics of both (`hertz_chain.pulse`), the SRS of both on one
+  frequency grid (`hertz_chain.srs`), and the Sprague–Geers magnitude, phase and comprehensive errors.
+
+**Sprague–Geers errors** (M. A. Sprague and T. L. Geers, "A spectral-element method for modelling
+cavitation in transient fluid–structure interaction", Int. J. Numer. Meth. Eng. 60 (2004) 2467–2499;
+reviewed in L. E. Schwer, "Validation metrics for response histories: perspectives and case studies",
+Engineering with Computers 23 (2007) 295–309). With the measured history `m(t)` and the computed `c(t)`
+over the common window, `ψ_mm = ∫m²`, `ψ_cc = ∫c²`, `ψ_mc = ∫mc`:
+
+    M = sqrt(ψ_cc / ψ_mm) − 1,     P = arccos(ψ_mc / sqrt(ψ_mm ψ_cc)) / π,     C = sqrt(M² + P²).
+
+`M` is the relative magnitude error (0 for equal energy, `k − 1` for `c = k·m`); `P` is in [0, 1]
+(0 in phase, `φ/π` for two sines `φ` apart over whole periods); the integrals are trapezoid sums on the
+measurement's grid.
+
+**Units.** Acceleration units are read from a closed list (`ACCEL_UNITS`: g, m/s², ft/s²) rather than
+through pint, because pint reads `g` as the gram; time units are s, ms and µs (`TIME_UNITS`).
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import re
+from pathlib import Path
+
+import numpy as np
+
+from .constants import G0
+from .errors import ParameterError
+from .pulse import PulseMetrics, pulse_metrics
+
+__all__ = [
+    "ACCEL_UNITS",
+    "TIME_UNITS",
+    "ALIGNMENTS",
+    "MeasuredPulse",
+    "Comparison",
+    "read_pulse_csv",
+    "sprague_geers",
+    "align_shift",
+    "compare",
+]
+
+#: Time units of a measured record: name -> seconds.
+TIME_UNITS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6}
+#: Acceleration units of a measured record: name -> m/s² (g is standard gravity, 9.80665 m/s²).
+ACCEL_UNITS = {"g": G0, "gn": G0, "g0": G0, "m/s^2": 1.0, "m/s2": 1.0, "m/s²": 1.0, "m s-2": 1.0,
+               "m/s**2": 1.0, "mps2": 1.0, "ft/s^2": 0.3048, "ft/s2": 0.3048, "ft/s²": 0.3048}
+#: How the model is placed in time against the measurement.
+ALIGNMENTS = ("xcorr", "onset", "none")
+
+
+@dataclasses.dataclass(frozen=True)
+class MeasuredPulse:
+    """A measured acceleration record in SI units: `t` (s, increasing), `a` (m/s²), where it came from
+    (`source`) and the units it was given in."""
+
+    t: np.ndarray
+    a: np.ndarray
+    source: str = ""
+    time_unit: str = "s"
+    accel_unit: str = "m/s^2"
+
+    @property
+    def sample_rate(self) -> float:
+        """Mean sample rate (Hz)."""
+        return (self.t.size - 1) / float(self.t[-1] - self.t[0])
+
+
+def _unit_of(header: str) -> str | None:
+    """The unit named in a column header: `name (unit)`, `name [unit]`, or a `name_unit` suffix."""
+    h = header.strip()
+    m = re.search(r"[\(\[]\s*([^\)\]]+?)\s*[\)\]]\s*$", h)
+    if m:
+        return m.group(1).strip()
+    m = re.search(r"[_\s]([A-Za-zµμ/\^\*²0-9\-]+)$", h)
+    if m and (m.group(1).lower() in TIME_UNITS or m.group(1).lower() in ACCEL_UNITS):
+        return m.group(1)
+    return None
+
+
+def _factor(unit: str, table: dict, what: str, key: str) -> float:
+    u = unit.strip()
+    for cand in (u, u.lower(), u.replace(" ", "")):
+        if cand in table:
+            return table[cand]
+    raise ParameterError(key, unit, f"a {what} unit: {', '.join(sorted(set(table)))}")
+
+
+def read_pulse_csv(path, *, time_unit: str | None = None, accel_unit: str | None = None,
+                   time_column: int = 0, accel_column: int = 1) -> MeasuredPulse:
+    """Read a measured pulse from a CSV (or whitespace/semicolon separated) text file.
+
+    **Arguments:**
+
+    - `path`: the file. Lines starting with `#` are comments. The first other line is a header when
+      it is not all numbers.
+    - `time_unit`, `accel_unit`: the units (`TIME_UNITS`, `ACCEL_UNITS`); override the header's.
+    - `time_column`, `accel_column`: 0-based column numbers (0 and 1).
+
+    **Returns:** a :class:`MeasuredPulse` in SI units.
+
+    **Raises:** `ParameterError` (naming the file, the column or the unit) for a missing file, no
+    units from either the header or the arguments, an unknown unit, fewer than 3 rows, a non-number
+    cell, non-finite values, or times that do not increase.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8-sig")
+    except OSError as exc:
+        raise ParameterError("measured file", str(path), f"a readable file ({exc.strerror or exc})") from None
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    if not lines:
+        raise ParameterError(str(path), "no data rows", "a time column and an acceleration column")
+    dialect = ";" if ";" in lines[0] else ("," if "," in lines[0] else None)
+    rows = [r for r in csv.reader(io.StringIO("\n".join(lines)), delimiter=dialect)] if dialect else \
+        [ln.split() for ln in lines]
+    header = None
+
+    def numeric(cells):
+        try:
+            [float(c) for c in cells if c.strip()]
+            return True
+        except ValueError:
+            return False
+
+    if not numeric(rows[0]):
+        header, rows = rows[0], rows[1:]
+    need = max(time_column, accel_column) + 1
+    if header is not None and len(header) < need:
+        raise ParameterError(f"{path}: columns", len(header), f"at least {need} columns")
+    units = {}
+    for col, given, table, what in ((time_column, time_unit, TIME_UNITS, "time"),
+                                    (accel_column, accel_unit, ACCEL_UNITS, "acceleration")):
+        unit = given if given is not None else (_unit_of(header[col]) if header is not None else None)
+        if unit is None:
+            where = f"header {header[col]!r}" if header is not None else "no header"
+            raise ParameterError(f"{path}: {what} unit", where,
+                                 f"a unit in the header, e.g. 'time (ms), acceleration (g)', or the "
+                                 f"{'--time-unit' if what == 'time' else '--accel-unit'} option "
+                                 f"({', '.join(sorted(set(table)))})")
+        units[what] = (unit, _factor(unit, table, what, f"{path}: {what} unit"))
+    try:
+        data = np.array([[float(r[time_column]), float(r[accel_column])] for r in rows], dtype=float)
+    except (ValueError, IndexError):
+        bad = next(i for i, r in enumerate(rows) if not _row_ok(r, time_column, accel_column))
+        raise ParameterError(f"{path}: data row {bad + 1}", ",".join(rows[bad]),
+                             f"numbers in columns {time_column + 1} and {accel_column + 1}") from None
+    if data.shape[0] < 3 or not np.all(np.isfinite(data)):
+        raise ParameterError(str(path), f"{data.shape[0]} rows", "at least 3 rows of finite numbers")
+    t = data[:, 0] * units["time"][1]
+    if not np.all(np.diff(t) > 0):
+        i = int(np.argmin(np.diff(t) > 0))
+        raise ParameterError(f"{path}: time", f"row {i + 2}: {data[i + 1, 0]!r} after {data[i, 0]!r}",
+                             "strictly increasing times")
+    return MeasuredPulse(t, data[:, 1] * units["acceleration"][1], str(path), units["time"][0],
+                         units["acceleration"][0])
+
+
+def _row_ok(r, i, j) -> bool:
+    try:
+        float(r[i]), float(r[j])
+        return True
+    except (ValueError, IndexError):
+        return False
+
+
+def sprague_geers(measured, computed, t=None) -> tuple[float, float, float]:
+    """Sprague–Geers `(M, P, C)` of `computed` against `measured` on common samples (module docstring).
+
+    `t` (optional): the sample times, for the trapezoid integrals on a non-uniform grid.
+
+    **Raises:** `ParameterError` for different lengths, non-finite values, or a zero history.
+    """
+    m, c = np.asarray(measured, dtype=float), np.asarray(computed, dtype=float)
+    if m.shape != c.shape or m.ndim != 1 or m.size < 2:
+        raise ParameterError("computed", f"shape {c.shape}", f"the measured history's shape {m.shape}")
+    if not (np.all(np.isfinite(m)) and np.all(np.isfinite(c))):
+        raise ParameterError("measured, computed", "non-finite values", "finite histories")
+    x = np.arange(m.size, dtype=float) if t is None else np.asarray(t, dtype=float)
+    mm, cc, mc = (np.trapezoid(u, x) for u in (m * m, c * c, m * c))
+    if not (mm > 0 and cc > 0):
+        raise ParameterError("measured, computed", "a zero history", "histories with a non-zero value")
+    M = float(np.sqrt(cc / mm) - 1.0)
+    P = float(np.arccos(np.clip(mc / np.sqrt(mm * cc), -1.0, 1.0)) / np.pi)
+    return M, P, float(np.hypot(M, P))
+
+
+def align_shift(t, reference, moving, how: str = "xcorr", level: float = 0.1) -> float:
+    """The time shift `τ` (s) to add to the times of `moving` so that it lines up with `reference`,
+    both sampled on the same uniform grid `t`.
+
+    - `"xcorr"`: the lag of the largest cross-correlation (`scipy.signal.correlate`), refined between
+      samples by the parabola through the peak and its neighbours;
+    - `"onset"`: the difference of the first upward crossings of `level` (10 %) of each one's peak
+      (linear interpolation);
+    - `"none"`: 0.
+    """
+    from scipy import signal
+
+    if how not in ALIGNMENTS:
+        raise ParameterError("align", how, f"one of {', '.join(ALIGNMENTS)}")
+    if how == "none":
+        return 0.0
+    t = np.asarray(t, dtype=float)
+    r, mv = np.asarray(reference, dtype=float), np.asarray(moving, dtype=float)
+    h = (t[-1] - t[0]) / (t.size - 1)
+    if how == "onset":
+        def onset(y):
+            s = 1.0 if y.max() >= -y.min() else -1.0
+            y = s * y
+            i = int(np.argmax(y >= level * y.max()))
+            if i == 0:
+                return t[0]
+            return t[i - 1] + h * (level * y.max() - y[i - 1]) / (y[i] - y[i - 1])
+        return float(onset(r) - onset(mv))
+    xc = signal.correlate(r, mv, mode="full", method="fft")
+    k = int(np.argmax(xc))
+    lag = float(k - (mv.size - 1))
+    if 0 < k < xc.size - 1:
+        y0, y1, y2 = xc[k - 1], xc[k], xc[k + 1]
+        den = y0 - 2 * y1 + y2
+        if den < 0:
+            lag += 0.5 * (y0 - y2) / den
+    return lag * h
+
+
+@dataclasses.dataclass(frozen=True)
+class Comparison:
+    """The model's top pulse against a measured pulse (`compare`). SI units; times of the measurement.
+
+    | field | meaning |
+    |---|---|
+    | `t` | the common uniform grid (s): the measurement's samples over the compared window |
+    | `measured`, `model` | the two accelerations on `t` (m/s²), filtered alike, the model shifted |
+    | `shift` | time added to the model's clock to align it (s) |
+    | `alignment`, `cfc` | how it was aligned; the CFC applied to both (None: unfiltered) |
+    | `measured_metrics`, `model_metrics` | `PulseMetrics` of each |
+    | `sprague_geers` | `(M, P, C)` of the model against the measurement |
+    | `srs_frequencies_Hz`, `measured_srs`, `model_srs` | maximax SRS (Q = 10, g) of each |
+    | `notes` | one line each: what was capped or assumed |
+    """
+
+    t: np.ndarray
+    measured: np.ndarray
+    model: np.ndarray
+    shift: float
+    alignment: str
+    cfc: int | None
+    measured_metrics: PulseMetrics
+    model_metrics: PulseMetrics
+    sprague_geers: tuple[float, float, float]
+    srs_frequencies_Hz: np.ndarray
+    measured_srs: np.ndarray
+    model_srs: np.ndarray
+    notes: tuple[str, ...] = ()
+    source: str = ""
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (SI units, plus g and ms where the key says so)."""
+        def metrics(pm: PulseMetrics) -> dict:
+            return {"peak_g": pm.peak_g, "duration_10_ms": pm.duration_10 * 1e3,
+                    "equivalent_half_sine_ms": pm.equivalent_half_sine_duration * 1e3,
+                    "rise_time_ms": pm.rise_time * 1e3, "delta_v_mps": pm.delta_v_main}
+        mm, cm = metrics(self.measured_metrics), metrics(self.model_metrics)
+        M, P, C = self.sprague_geers
+        return {
+            "measured_file": self.source,
+            "alignment": self.alignment,
+            "shift_ms": self.shift * 1e3,
+            "cfc": self.cfc,
+            "measured": mm,
+            "model": cm,
+            "relative_difference": {k: (cm[k] - mm[k]) / mm[k] if mm[k] else None for k in mm},
+            "sprague_geers": {"magnitude": M, "phase": P, "comprehensive": C},
+            "srs": {"frequencies_Hz": self.srs_frequencies_Hz.tolist(), "measured_g": self.measured_srs.tolist(),
+                    "model_g": self.model_srs.tolist(),
+                    "max_abs_difference_dB": float(np.max(np.abs(20 * np.log10(self.model_srs / self.measured_srs))))},
+            "notes": list(self.notes),
+        }
+
+
+def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: str = "xcorr") -> Comparison:
+    """Compare the top pulse of a simulated stack with a measured pulse.
+
+    **Arguments:**
+
+    - `report`: a `hertz_chain.Report` (e.g. `hc.simulate_file(path)`) whose run holds the top
+      mass's pulse.
+    - `measured`: a :class:`MeasuredPulse` (:func:`read_pulse_csv`); it must be uniformly sampled when
+      `cfc` is given.
+    - `cfc`: filter both the measurement and the model by this channel frequency class (60, 180, 600,
+      1000; `hertz_chain.filters.cfc_filter`), as a lab's data channel would; None: no filter.
+    - `align`: `"xcorr"` (default), `"onset"` or `"none"` (`align_shift`).
+
+    The model's accelerometer (`analysis.accelerometer`: the dense solution) is sampled on the
+    measurement's grid, shifted, filtered alike; outside the run it reads zero (free flight before
+    impact). The compared window is the measurement's record. The SRS grid is 1/12 octave over
+    `[min(100 Hz, 0.1/D), max(10 kHz, 20/D)]` (D the measured 10 % duration), capped at a tenth of the
+    measurement's sample rate, with a note saying so when capped.
+
+    **Returns:** a :class:`Comparison`.
+
+    **Raises:** `ParameterError` for a report without a top pulse, a bad `cfc`/`align`, or a
+    non-uniform record with `cfc`.
+    """
+    from .analysis import accelerometer
+    from .filters import cfc_filter
+    from .srs import octave_frequencies, srs_uniform
+
+    if align not in ALIGNMENTS:
+        raise ParameterError("align", align, f"one of {', '.join(ALIGNMENTS)}")
+    if report.top_pulse is None:
+        raise ParameterError("report", "no top pulse", "a run in which the top mass was struck")
+    t = np.asarray(measured.t, dtype=float)
+    h = (t[-1] - t[0]) / (t.size - 1)
+    notes = []
+    uniform = np.max(np.abs(np.diff(t) - h)) <= 1e-6 * h
+    if not uniform:
+        if cfc is not None:
+            raise ParameterError("measured", "non-uniform sample times", "a uniformly sampled record for cfc")
+        t_u = t[0] + h * np.arange(t.size)
+        m_u = np.interp(t_u, t, measured.a)
+        notes.append(f"the measurement's times are not uniform: resampled linearly at {1 / h:.6g} Hz")
+        t = t_u
+    else:
+        m_u = np.asarray(measured.a, dtype=float)
+    sol_t = np.asarray(report.solution.steps.t, dtype=float)
+    top = report.top_pulse
+
+    def model_on(times):
+        inside = (times >= sol_t[0]) & (times <= sol_t[-1])
+        out = np.zeros_like(times)
+        out[inside] = accelerometer(report, times[inside])
+        return out
+
+    # first place the model's main pulse in the middle of the record's pulse, then align finely
+    meas_pm = pulse_metrics(t, m_u)
+    coarse = (0.5 * (meas_pm.t_start_10 + meas_pm.t_end_10)) - 0.5 * (top.t_start_10 + top.t_end_10)
+    model_raw = model_on(t - coarse)
+    shift = coarse + align_shift(t, m_u, model_raw, align) if align != "none" else 0.0
+    model = model_on(t - shift)
+    meas = m_u
+    if cfc is not None:
+        meas, model = cfc_filter(t, meas, cfc), cfc_filter(t, model, cfc)
+    meas_pm, model_pm = pulse_metrics(t, meas), pulse_metrics(t, model)
+    M, P, C = sprague_geers(meas, model, t)
+    D = meas_pm.duration_10
+    step = 2.0 ** (1 / 12) * (1 + 1e-12)
+    f_lo, f_hi = min(100.0, 0.1 / D) / step, max(1e4, 20.0 / D) * step
+    cap = 0.1 / h
+    if f_hi > cap:
+        notes.append(f"SRS band capped at {cap:.6g} Hz (a tenth of the measurement's {1 / h:.6g} Hz sample rate), "
+                     f"below the {f_hi / step:.6g} Hz asked for")
+        f_hi = cap
+    freqs = octave_frequencies(f_lo, f_hi)
+    s_meas = srs_uniform(meas / G0, 1.0 / h, freqs, 10.0)
+    s_model = srs_uniform(model / G0, 1.0 / h, freqs, 10.0)
+    return Comparison(t, meas, model, float(shift), align, cfc, meas_pm, model_pm, (M, P, C), freqs,
+                      s_meas.maximax, s_model.maximax, tuple(notes), measured.source)

@@ -1,0 +1,457 @@
+"""Shock-test conditions and the check of a pulse against them (`hertz-chain check`).
+
+**The table.** `hertz_chain/data/shock_standards.csv` holds one nominal pulse per test condition
+(JESD22-B110 A–H, MIL-STD-883 Method 2002 A–G, MIL-STD-810H Method 516.8 Procedure I sawtooth pulses),
+each row with its document, edition, clause and where its numbers were read (`source`, and
+`source_level`: primary, secondary, or secondary-unverified). :func:`conditions` reads it;
+:func:`find_condition` looks a name up (`"JESD22-B110 B"`, `"MIL-STD-883 2002 B"`: case, spaces and
+hyphens do not matter). Tolerances are in the table only where the source gave them; otherwise the
+stack file's `[test]` section gives them (:class:`TestSpec`). docs/lab-workflow.md lists what is there,
+what is not, and why.
+
+**Nominal pulses** (`A` the peak, `D` the duration, time from the start of the pulse):
+
+| shape | a(t) on [0, D] | ΔV | 10 % width |
+|---|---|---|---|
+| half-sine | `A sin(πt/D)` | `2AD/π` | `(1 − 2 asin(0.1)/π) D = 0.93623 D` |
+| sawtooth (terminal peak) | `A t/D`, then 0 | `AD/2` | `0.9 D` |
+| trapezoid | rise and fall over `D/10` each | `0.9 AD` | `0.98 D` |
+
+**The check** (:func:`check_pulse`) compares like with like: the pulse's peak with `A`; its width between
+its 10 % points with the nominal pulse's own 10 % width (so a perfect half-sine of duration `D` passes
+exactly); its velocity change over the main lobe with the nominal ΔV; and, when a band is given, the pulse
+against the nominal pulse ± `band`·A over the nominal pulse's support joined with the pulse's main lobe,
+the nominal pulse placed where the smallest margin is largest. Each criterion reports its value, the
+allowed range and the margin (the distance to the nearer limit, in the criterion's unit, negative when
+it fails). Without a tolerance a criterion is reported, not judged (`passed` None).
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import difflib
+import functools
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from .constants import G0
+from .errors import ParameterError
+from .pulse import pulse_metrics
+
+__all__ = [
+    "SHAPES",
+    "ShockCondition",
+    "TestSpec",
+    "Criterion",
+    "CheckResult",
+    "conditions",
+    "find_condition",
+    "nominal_pulse",
+    "nominal_delta_v",
+    "nominal_width_10",
+    "check_pulse",
+    "standards_table",
+    "TEST_KEYS",
+    "parse_test",
+    "check",
+]
+
+STANDARDS_CSV = Path(__file__).resolve().parent / "data" / "shock_standards.csv"
+
+#: Nominal pulse shapes: name -> (ΔV / (A·D), 10 % width / D).
+SHAPES = {
+    "half-sine": (2.0 / math.pi, 1.0 - 2.0 * math.asin(0.1) / math.pi),
+    "sawtooth": (0.5, 0.9),
+    "trapezoid": (0.9, 0.98),
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class ShockCondition:
+    """One row of the table (SI units; tolerances in percent, None where the source gives none)."""
+
+    standard: str
+    condition: str
+    document: str
+    edition: str
+    clause: str
+    shape: str
+    peak_g: float
+    duration: float  # s
+    delta_v: float | None  # m/s, as tabulated (None if the source gives none)
+    peak_tolerance: tuple[float, float] | None
+    duration_tolerance: tuple[float, float] | None
+    velocity_tolerance: tuple[float, float] | None
+    source: str
+    source_level: str
+
+    @property
+    def name(self) -> str:
+        return f"{self.standard} {self.condition}"
+
+
+def _norm(name: str) -> str:
+    return re.sub(r"[\s\-_.]+", "", str(name)).lower()
+
+
+def _tol(low: str, high: str) -> tuple[float, float] | None:
+    if not low.strip() and not high.strip():
+        return None
+    return (float(low), float(high))
+
+
+@functools.lru_cache(maxsize=1)
+def conditions() -> tuple[ShockCondition, ...]:
+    """Every row of `data/shock_standards.csv`, in file order."""
+    lines = [ln for ln in STANDARDS_CSV.read_text(encoding="utf-8").splitlines() if not ln.startswith("#")]
+    rows = []
+    by_key: dict[tuple[str, str], str] = {}
+    for r in csv.DictReader(lines):
+        vt = r["velocity_tol_pct"].strip()
+        m = re.match(r"as row ([^;,]+)(.*)", r["source"])
+        if m and (r["standard"], m.group(1).strip()) in by_key:  # "as row A; ...": row A's source, then the rest
+            r["source"] = by_key[(r["standard"], m.group(1).strip())] + m.group(2)
+        by_key[(r["standard"], r["condition"])] = r["source"]
+        rows.append(ShockCondition(
+            standard=r["standard"], condition=r["condition"], document=r["document"], edition=r["edition"],
+            clause=r["clause"], shape=r["shape"], peak_g=float(r["peak_g"]), duration=float(r["duration_ms"]) * 1e-3,
+            delta_v=float(r["delta_v_mps"]) if r["delta_v_mps"].strip() else None,
+            peak_tolerance=_tol(r["peak_tol_low_pct"], r["peak_tol_high_pct"]),
+            duration_tolerance=_tol(r["duration_tol_low_pct"], r["duration_tol_high_pct"]),
+            velocity_tolerance=(-float(vt), float(vt)) if vt else None,
+            source=r["source"], source_level=r["source_level"],
+        ))
+    return tuple(rows)
+
+
+def find_condition(name: str) -> ShockCondition:
+    """The row named `name` (`"<standard> <condition>"`, e.g. `"JESD22-B110 B"`).
+
+    **Raises:** `ParameterError` naming the closest names when there is no such row.
+    """
+    key = _norm(name)
+    table = {_norm(c.name): c for c in conditions()}
+    if key in table:
+        return table[key]
+    names = [c.name for c in conditions()]
+    close = difflib.get_close_matches(str(name), names, n=3, cutoff=0.5)
+    hint = f"did you mean {', '.join(repr(c) for c in close)}? " if close else ""
+    raise ParameterError("standard", name, f"{hint}a condition of the table (hertz-chain check --standard list)")
+
+
+def standards_table() -> str:
+    """The table as text: name, shape, peak, duration, tolerances and the source level."""
+    def tol(t):
+        return "-" if t is None else f"{t[0]:+g}/{t[1]:+g} %"
+    lines = [f"{'condition':<44} {'shape':<10} {'peak g':>8} {'ms':>6}  {'peak tol':<12} {'dur. tol':<12} source"]
+    for c in conditions():
+        lines.append(f"{c.name:<44} {c.shape:<10} {c.peak_g:>8g} {c.duration * 1e3:>6g}  {tol(c.peak_tolerance):<12} "
+                     f"{tol(c.duration_tolerance):<12} {c.source_level}")
+    lines.append("tolerances marked '-' are not in the sources read; give them in the stack file's [test] section "
+                 "(docs/lab-workflow.md)")
+    return "\n".join(lines)
+
+
+def _check_shape(shape: str) -> str:
+    if shape not in SHAPES:
+        raise ParameterError("shape", shape, f"one of {', '.join(SHAPES)}")
+    return shape
+
+
+def nominal_pulse(shape: str, peak: float, duration: float, t) -> np.ndarray:
+    """The nominal pulse `a(t)` (units of `peak`), `t` from its start (s); zero outside `[0, D]` (module
+    docstring's table)."""
+    _check_shape(shape)
+    t = np.asarray(t, dtype=float)
+    s = t / duration
+    inside = (s >= 0) & (s <= 1)
+    if shape == "half-sine":
+        y = np.sin(np.pi * np.clip(s, 0, 1))
+    elif shape == "sawtooth":
+        y = np.clip(s, 0, 1)
+    else:
+        y = np.clip(np.minimum(s, 1 - s) / 0.1, 0, 1)
+    return np.where(inside, peak * y, 0.0)
+
+
+def nominal_delta_v(shape: str, peak: float, duration: float) -> float:
+    """Velocity change of the nominal pulse (`peak` in m/s², `duration` in s)."""
+    return SHAPES[_check_shape(shape)][0] * peak * duration
+
+
+def nominal_width_10(shape: str, duration: float) -> float:
+    """Width of the nominal pulse between its 10 % points."""
+    return SHAPES[_check_shape(shape)][1] * duration
+
+
+@dataclasses.dataclass(frozen=True)
+class TestSpec:
+    """What a pulse is checked against: a nominal pulse and tolerances (percent of nominal), the band's
+    half-width as a fraction of the peak, and where each came from. `from_condition` fills it from a
+    table row; the stack file's `[test]` section overrides any field."""
+
+    __test__ = False  # not a pytest class
+
+    name: str
+    shape: str
+    peak_g: float
+    duration: float
+    peak_tolerance: tuple[float, float] | None = None
+    duration_tolerance: tuple[float, float] | None = None
+    velocity_tolerance: tuple[float, float] | None = None
+    band: float | None = None
+    source: str = ""
+
+    @classmethod
+    def from_condition(cls, c: ShockCondition, **overrides) -> TestSpec:
+        spec = cls(c.name, c.shape, c.peak_g, c.duration, c.peak_tolerance, c.duration_tolerance,
+                   c.velocity_tolerance, None, f"{c.document}, {c.clause} ({c.source_level}: {c.source})")
+        return dataclasses.replace(spec, **{k: v for k, v in overrides.items() if v is not None})
+
+
+@dataclasses.dataclass(frozen=True)
+class Criterion:
+    """One line of a check: `value` against `nominal` with the allowed `[low, high]` (None: not judged)."""
+
+    name: str
+    unit: str
+    value: float
+    nominal: float
+    low: float | None
+    high: float | None
+    margin: float | None
+    passed: bool | None
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+@dataclasses.dataclass(frozen=True)
+class CheckResult:
+    """The outcome of :func:`check_pulse`: the criteria, whether every judged one passed, the shift of
+    the nominal pulse (s, from the record's time origin) and the spec."""
+
+    spec: TestSpec
+    criteria: tuple[Criterion, ...]
+    nominal_start: float
+    notes: tuple[str, ...] = ()
+    t: np.ndarray | None = dataclasses.field(default=None, repr=False)  # the checked record (s)
+    a: np.ndarray | None = dataclasses.field(default=None, repr=False)  # and its samples (m/s²)
+
+    @property
+    def passed(self) -> bool:
+        """True when every judged criterion passed (and at least one was judged)."""
+        judged = [c.passed for c in self.criteria if c.passed is not None]
+        return bool(judged) and all(judged)
+
+    def to_dict(self) -> dict:
+        return {"condition": self.spec.name, "shape": self.spec.shape, "nominal_peak_g": self.spec.peak_g,
+                "nominal_duration_ms": self.spec.duration * 1e3, "source": self.spec.source,
+                "passed": self.passed, "nominal_start_s": self.nominal_start,
+                "criteria": [c.to_dict() for c in self.criteria], "notes": list(self.notes)}
+
+    def table(self) -> str:
+        out = [f"check against {self.spec.name} ({self.spec.shape}, {self.spec.peak_g:g} g, "
+               f"{self.spec.duration * 1e3:g} ms)"]
+        for c in self.criteria:
+            rng = "not judged (no tolerance)" if c.passed is None else f"allowed [{c.low:.5g}, {c.high:.5g}]"
+            verdict = "" if c.passed is None else ("PASS" if c.passed else "FAIL")
+            margin = "" if c.margin is None else f" margin {c.margin:+.4g} {c.unit}"
+            out.append(f"  {c.name:<16} {c.value:.5g} {c.unit} (nominal {c.nominal:.5g}) {rng}{margin} {verdict}")
+        out.append(f"result: {'PASS' if self.passed else 'FAIL'}")
+        out.extend(f"note: {n}" for n in self.notes)
+        return "\n".join(out)
+
+
+def _judge(name, unit, value, nominal, tol) -> Criterion:
+    if tol is None:
+        return Criterion(name, unit, float(value), float(nominal), None, None, None, None)
+    lo, hi = nominal * (1 + tol[0] / 100), nominal * (1 + tol[1] / 100)
+    margin = min(value - lo, hi - value)
+    return Criterion(name, unit, float(value), float(nominal), float(lo), float(hi), float(margin), bool(margin >= 0))
+
+
+def band_margin(t, a_g, spec: TestSpec, start: float, lobe: tuple[float, float]) -> float:
+    """Smallest `band·A − |a − nominal|` (g) over the nominal pulse's support `[start, start + D]` joined
+    with the pulse's main lobe `lobe`, for the nominal pulse starting at `start` (the pulse `a_g` in g,
+    linear between samples, sampled at `t`)."""
+    t0, t1 = min(start, lobe[0]), max(start + spec.duration, lobe[1])
+    inside = (t >= t0) & (t <= t1)
+    tt = np.concatenate([[t0], t[inside], [t1]])
+    aa = np.interp(tt, t, a_g)
+    nom = nominal_pulse(spec.shape, spec.peak_g, spec.duration, tt - start)
+    return float(np.min(spec.band * spec.peak_g - np.abs(aa - nom)))
+
+
+def check_pulse(t, a, spec: TestSpec) -> CheckResult:
+    """Check the pulse `a(t)` (m/s², samples linear between them) against `spec` (module docstring).
+
+    **Returns:** a :class:`CheckResult`: peak (g), width at 10 % (ms), velocity change (m/s) and, with
+    `spec.band`, the band (g).
+
+    **Raises:** `ParameterError` for a record `pulse_metrics` refuses.
+    """
+    from scipy.optimize import minimize_scalar
+
+    t, a = np.asarray(t, dtype=float), np.asarray(a, dtype=float)
+    pm = pulse_metrics(t, a)
+    a_g = pm.sign * a / G0
+    peak_nom = spec.peak_g * G0
+    crit = [
+        _judge("peak", "g", pm.peak_g, spec.peak_g, spec.peak_tolerance),
+        _judge("duration (10 %)", "ms", pm.duration_10 * 1e3, nominal_width_10(spec.shape, spec.duration) * 1e3,
+               spec.duration_tolerance),
+        _judge("velocity change", "m/s", abs(pm.delta_v_main), nominal_delta_v(spec.shape, peak_nom, spec.duration),
+               spec.velocity_tolerance),
+    ]
+    notes = []
+    # the nominal pulse starts where its 10 % points centre on the pulse's (refined to the best band fit)
+    w = nominal_width_10(spec.shape, spec.duration)
+    lead = {"half-sine": math.asin(0.1) / math.pi, "sawtooth": 0.1, "trapezoid": 0.01}[spec.shape] * spec.duration
+    start = 0.5 * (pm.t_start_10 + pm.t_end_10) - (lead + 0.5 * w)
+    if spec.band is not None:
+        lobe = (pm.t_start_10, pm.t_end_10)
+        span = 0.5 * spec.duration
+        grid = start + np.linspace(-span, span, 201)
+        vals = [band_margin(t, a_g, spec, s, lobe) for s in grid]
+        k = int(np.argmax(vals))
+        lo_s, hi_s = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
+        res = minimize_scalar(lambda s: -band_margin(t, a_g, spec, s, lobe), bounds=(lo_s, hi_s), method="bounded",
+                              options={"xatol": 1e-6 * spec.duration})
+        start = float(res.x) if -res.fun >= vals[k] else float(grid[k])
+        m = band_margin(t, a_g, spec, start, lobe)
+        crit.append(Criterion("band", "g", float(spec.band * spec.peak_g - m), 0.0, 0.0,
+                              float(spec.band * spec.peak_g), float(m), bool(m >= 0)))
+    if pm.truncated:
+        notes.append("the record cuts the pulse: its duration and velocity change are measured to the record's end")
+    return CheckResult(spec, tuple(crit), float(start), tuple(notes), t, a)
+
+
+# ------------------------------------------------------------------------------------------ files
+#: Keys of a stack file's `[test]` section.
+TEST_KEYS = ("standard", "shape", "peak_g", "duration", "peak_tolerance", "duration_tolerance",
+             "velocity_tolerance", "band")
+
+
+def _tolerance(raw, key: str) -> tuple[float, float]:
+    """`10` (meaning ±10 %) or `[-10, 20]` (percent below and above the nominal value)."""
+    from .errors import StackFileError
+
+    vals = raw if isinstance(raw, list) else [raw]
+    if (not 1 <= len(vals) <= 2 or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in vals)
+            or not all(math.isfinite(v) for v in vals)):
+        raise StackFileError(f"test.{key}: {raw!r} is invalid: a percentage (10 = ±10 %) or [below, above] "
+                             "in percent, e.g. [-20, 20]")
+    lo, hi = (-abs(vals[0]), abs(vals[0])) if len(vals) == 1 else (float(vals[0]), float(vals[1]))
+    if not (-100 < lo <= 0 <= hi):
+        raise StackFileError(f"test.{key}: {raw!r} is invalid: [below, above] with -100 < below <= 0 <= above (percent)")
+    return (lo, hi)
+
+
+def parse_test(raw, standard: str | None = None) -> TestSpec:
+    """The `[test]` section of a stack file (a dict), with `standard` (the command line's `--standard`)
+    taking the place of `test.standard`. A table row gives the nominal pulse and its tolerances; any
+    key of the section overrides it; without a row, `shape`, `peak_g` and `duration` are needed.
+
+    **Raises:** `StackFileError` (`test.KEY: ...`) or `ParameterError` (an unknown standard).
+    """
+    from .errors import StackFileError
+    from .stackfile import parse_quantity
+
+    raw = dict(raw or {})
+    unknown = sorted(set(raw) - set(TEST_KEYS))
+    if unknown:
+        raise StackFileError(f"test.{unknown[0]}: unknown key; allowed: {', '.join(TEST_KEYS)}")
+    name = standard if standard is not None else raw.get("standard")
+    over: dict = {}
+    if "shape" in raw:
+        if raw["shape"] not in SHAPES:
+            raise StackFileError(f"test.shape: {raw['shape']!r} is invalid: one of {', '.join(SHAPES)}")
+        over["shape"] = raw["shape"]
+    if "peak_g" in raw:
+        v = raw["peak_g"]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and v > 0):
+            raise StackFileError(f"test.peak_g: {v!r} is invalid: a plain number of g (standard gravity) > 0")
+        over["peak_g"] = float(v)
+    if "duration" in raw:
+        d = parse_quantity(raw["duration"], "time", "test.duration")
+        if not d > 0:
+            raise StackFileError(f"test.duration: {raw['duration']!r} is invalid: a duration > 0, e.g. \"0.5 ms\"")
+        over["duration"] = d
+    for key in ("peak_tolerance", "duration_tolerance", "velocity_tolerance"):
+        if key in raw:
+            over[key] = _tolerance(raw[key], key)
+    if "band" in raw:
+        b = raw["band"]
+        if isinstance(b, bool) or not isinstance(b, (int, float)) or not (0 < b < 1):
+            raise StackFileError(f"test.band: {b!r} is invalid: the band's half-width as a fraction of the peak, "
+                                 "in (0, 1), e.g. 0.2")
+        over["band"] = float(b)
+    if name is not None:
+        if not isinstance(name, str):
+            raise StackFileError(f"test.standard: {name!r} is invalid: a condition name, e.g. \"JESD22-B110 B\"")
+        return TestSpec.from_condition(find_condition(name), **over)
+    missing = [k for k in ("shape", "peak_g", "duration") if k not in over]
+    if missing:
+        raise StackFileError(f"test.{missing[0]}: missing; give test.standard (a condition of the table) or the "
+                             "nominal pulse: shape, peak_g and duration")
+    return TestSpec(name="user-defined", source="the stack file's [test] section", **over)
+
+
+def read_test_file(path, standard: str | None = None) -> TestSpec:
+    """The `TestSpec` of a stack file's `[test]` section (or of `standard` alone). Errors name the file."""
+    import tomllib
+
+    from .errors import StackFileError
+
+    try:
+        doc = tomllib.loads(Path(path).read_text(encoding="utf-8-sig"))
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise StackFileError(f"{path}: {exc}") from None
+    if "test" not in doc and standard is None:
+        raise StackFileError(f"{path}: test: missing; give a [test] section or --standard NAME "
+                             "(hertz-chain check --standard list)")
+    try:
+        return parse_test(doc.get("test"), standard)
+    except StackFileError as exc:
+        raise StackFileError(f"{path}: {exc}") from None
+
+
+def pulse_record(report, spec: TestSpec, samples_per_duration: int = 400):
+    """The top mass's accelerometer around its main pulse, uniformly sampled on the dense solution:
+    `(t, a)` over the pulse's 10 % points widened by one nominal duration each side (inside the run)."""
+    from .analysis import accelerometer
+
+    top = report.top_pulse
+    if top is None:
+        raise ParameterError("report", "no top pulse", "a run in which the top mass was struck")
+    st = report.solution.steps.t
+    t0 = max(float(st[0]), top.t_start_10 - spec.duration)
+    t1 = min(float(st[-1]), top.t_end_10 + spec.duration)
+    n = max(int(samples_per_duration * (t1 - t0) / spec.duration), 200)
+    t = np.linspace(t0, t1, n + 1)
+    return t, accelerometer(report, t)
+
+
+def check(path, standard: str | None = None):
+    """Simulate a stack file and check its top pulse against its `[test]` section or `standard`.
+
+    **Returns:** `(report, result)`: the `Report` of the run and the :class:`CheckResult` (which holds
+    the checked record, `pulse_record`, in `t` and `a`).
+
+    **Raises:** `StackFileError` / `ParameterError` for bad input (before anything is simulated).
+    """
+    from .stackfile import load_stack_file
+    from .workflow import run_spec
+
+    spec_file = load_stack_file(path)
+    spec = read_test_file(path, standard)
+    report = run_spec(spec_file)
+    if report.top_pulse is None:
+        raise ParameterError("stack", "no top pulse", "a run in which the top mass was struck")
+    t, a = pulse_record(report, spec)
+    return report, check_pulse(t, a, spec)
