@@ -1,0 +1,154 @@
+"""Shock-test conditions and `hertz-chain check`.
+
+References:
+- Nominal pulses in closed form: half-sine A sin(pi t/D) (Delta V = 2AD/pi, 10 % points at
+  asin(0.1) D/pi from either end); terminal-peak sawtooth A t/D (Delta V = AD/2); here integrated with
+  scipy.integrate.quad and the 10 % points found with scipy.optimize.brentq.
+- JESD22-B110B Table 1 tabulates Delta V beside each (A, D): it equals 2AD/pi to the table's rounding
+  (3 significant figures), which checks every (A, D) pair of those rows against an independent column.
+- MIL-STD-810H Table 516.8-IV Note 1 (as quoted by the row's source): the velocity-equivalent half-sine of
+  a terminal-peak sawtooth has peak (pi/4) A: AD/2 = 2 (pi A/4) D/pi.
+"""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+from scipy.optimize import brentq
+from typer.testing import CliRunner
+
+from hertz_chain.cli import app
+from hertz_chain.constants import G0
+from hertz_chain.errors import ParameterError, StackFileError
+from hertz_chain.standards import (SHAPES, TestSpec, check_pulse, conditions, find_condition, nominal_delta_v,
+                                   nominal_pulse, nominal_width_10, parse_test)
+
+runner = CliRunner()
+EXAMPLE = "examples/check_condition_b.toml"
+
+
+def test_every_row_names_its_source():
+    rows = conditions()
+    assert len(rows) >= 19
+    for c in rows:
+        assert c.source and not c.source.startswith("as row") and c.document
+        assert c.source_level in ("primary", "secondary", "secondary-unverified")
+        assert c.shape in SHAPES and c.peak_g > 0 and c.duration > 0
+    names = [c.name for c in rows]
+    assert len(set(names)) == len(names)
+    for std, conds in (("JESD22-B110", "ABCDEFGH"), ("MIL-STD-883 2002", "ABCDEFG")):
+        assert {c.condition for c in rows if c.standard == std} == set(conds)
+
+
+def test_jesd22_b110_delta_v_column_is_2AD_over_pi():
+    rows = [c for c in conditions() if c.standard == "JESD22-B110"]
+    for c in rows:
+        assert c.delta_v == pytest.approx(2 * c.peak_g * G0 * c.duration / math.pi, abs=0.006)
+
+
+def test_mil_std_810_half_sine_equivalent():
+    c = find_condition("MIL-STD-810 516 functional-ground")
+    a = c.peak_g * G0
+    assert nominal_delta_v("sawtooth", a, c.duration) == pytest.approx(
+        nominal_delta_v("half-sine", math.pi / 4 * a, c.duration), rel=1e-14)
+
+
+@pytest.mark.parametrize("shape", list(SHAPES))
+def test_nominal_shapes_against_quadrature(shape):
+    A, D = 3.0, 2e-3
+    f = lambda t: float(nominal_pulse(shape, A, D, t))  # noqa: E731
+    dv = quad(f, 0, D, points=[0.1 * D, 0.9 * D], epsabs=1e-14)[0]
+    assert nominal_delta_v(shape, A, D) == pytest.approx(dv, rel=1e-10)
+    up = brentq(lambda t: f(t) - 0.1 * A, 0, 0.5 * D, xtol=1e-16)
+    down = D if shape == "sawtooth" else brentq(lambda t: f(t) - 0.1 * A, 0.5 * D, D, xtol=1e-16)
+    assert nominal_width_10(shape, D) == pytest.approx(down - up, rel=1e-9)
+
+
+def test_names_are_forgiving_and_errors_suggest():
+    assert find_condition("jesd22 b110 b").name == "JESD22-B110 B"
+    assert find_condition("MIL-STD-883 2002 B").peak_g == 1500
+    with pytest.raises(ParameterError) as err:
+        find_condition("JESD22-B110 Z")
+    assert "did you mean" in str(err.value)
+
+
+def spec(**kw):
+    base = dict(name="t", shape="half-sine", peak_g=1500.0, duration=5e-4, peak_tolerance=(-20, 20),
+                duration_tolerance=(-30, 30), velocity_tolerance=(-15, 15), band=0.2)
+    return TestSpec(**dict(base, **kw))
+
+
+def half_sine_record(scale=1.0, start=3e-4, n=6001):  # dt = 0.25 us: the peak is a sample
+    t = np.linspace(0, 1.5e-3, n)
+    return t, scale * nominal_pulse("half-sine", 1500 * G0, 5e-4, t - start)
+
+
+def test_the_nominal_pulse_passes_with_the_full_margins():
+    t, a = half_sine_record()
+    r = check_pulse(t, a, spec())
+    assert r.passed
+    by = {c.name: c for c in r.criteria}
+    assert by["peak"].margin == pytest.approx(300.0, rel=1e-9)
+    assert by["duration (10 %)"].value == pytest.approx(nominal_width_10("half-sine", 5e-4) * 1e3, rel=1e-6)
+    assert by["velocity change"].value == pytest.approx(2 * 1500 * G0 * 5e-4 / math.pi, rel=1e-6)
+    assert by["band"].value < 1e-6 * 1500 and r.nominal_start == pytest.approx(3e-4, abs=1e-9)
+
+
+def test_a_25_percent_high_pulse_fails_by_5_percent_of_the_peak():
+    t, a = half_sine_record(scale=1.25)
+    r = check_pulse(t, a, spec())
+    by = {c.name: c for c in r.criteria}
+    assert not r.passed and not by["peak"].passed
+    assert by["peak"].margin == pytest.approx(-0.05 * 1500, rel=1e-9)
+    assert by["band"].margin == pytest.approx(-0.05 * 1500, rel=1e-6)  # at the peak: 0.25 A over, 0.2 A allowed
+    assert by["duration (10 %)"].passed  # same shape, same width
+
+
+def test_without_tolerances_nothing_is_judged():
+    t, a = half_sine_record()
+    r = check_pulse(t, a, spec(peak_tolerance=None, duration_tolerance=None, velocity_tolerance=None, band=None))
+    assert all(c.passed is None for c in r.criteria) and not r.passed
+
+
+def test_test_section_overrides_the_row():
+    s = parse_test({"standard": "JESD22-B110 B", "peak_tolerance": [-10, 15], "band": 0.15})
+    assert (s.peak_g, s.duration, s.peak_tolerance, s.band) == (1500, 5e-4, (-10.0, 15.0), 0.15)
+    s = parse_test({"shape": "sawtooth", "peak_g": 20, "duration": "11 ms", "duration_tolerance": 10})
+    assert s.duration == pytest.approx(0.011) and s.duration_tolerance == (-10.0, 10.0)
+
+
+@pytest.mark.parametrize("raw, key", [
+    ({"standard": "JESD22-B110 B", "peak": 3}, "test.peak"),
+    ({"shape": "square", "peak_g": 1, "duration": "1 ms"}, "test.shape"),
+    ({"shape": "half-sine", "duration": "1 ms"}, "test.peak_g"),
+    ({"standard": "JESD22-B110 B", "peak_tolerance": [5, 10]}, "test.peak_tolerance"),
+    ({"standard": "JESD22-B110 B", "band": 1.5}, "test.band"),
+    ({"standard": "JESD22-B110 B", "duration": "1 kg"}, "test.duration"),
+])
+def test_bad_test_sections(raw, key):
+    with pytest.raises(StackFileError) as err:
+        parse_test(raw)
+    assert key in str(err.value) and "\n" not in str(err.value)
+
+
+def test_cli_check_example_passes_and_list():
+    res = runner.invoke(app, ["check", EXAMPLE, "--json"])
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)
+    assert d["passed"] and d["condition"] == "MIL-STD-883 2002 B"
+    peak = next(c for c in d["criteria"] if c["name"] == "peak")
+    # the example was designed for 1500 g (hertz-chain optimize, examples/optimize_condition_b.toml)
+    assert peak["value"] == pytest.approx(1500, rel=1e-3)
+    res = runner.invoke(app, ["check", "--standard", "list"])
+    assert res.exit_code == 0 and all(c.name in res.stdout for c in conditions())
+
+
+def test_cli_check_fails_with_exit_1_and_bad_input_with_2(tmp_path):
+    res = runner.invoke(app, ["check", EXAMPLE, "--standard", "JESD22-B110 H"])  # 2900 g, 0.3 ms
+    assert res.exit_code == 1 and "FAIL" in res.stdout
+    res = runner.invoke(app, ["check", EXAMPLE, "--standard", "nope"])
+    assert res.exit_code == 2 and "standard" in res.output
+    res = runner.invoke(app, ["check", "examples/mvg6_gapped.toml"])
+    assert res.exit_code == 2 and "test: missing" in res.output
