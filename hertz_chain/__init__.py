@@ -19,6 +19,17 @@ _EXPORTS = {
     "RigidComparison": "analysis",
     "analyse": "analysis",
     "independence": "analysis",
+    "accelerometer": "analysis",
+    "cfc_filter": "filters",
+    "Comparison": "measured",
+    "MeasuredPulse": "measured",
+    "compare": "measured",
+    "read_pulse_csv": "measured",
+    "sprague_geers": "measured",
+    "CheckResult": "standards",
+    "ShockCondition": "standards",
+    "check": "standards",
+    "find_condition": "standards",
     "Built": "build",
     "build": "build",
     "CHI_MAPS": "calibration",
@@ -136,7 +147,7 @@ sys.modules[__name__].__class__ = _Package
 
 
 if TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
-    from .analysis import Report, RigidComparison, analyse, independence
+    from .analysis import Report, RigidComparison, accelerometer, analyse, independence
     from .build import Built, build
     from .calibration import (
         CHI_MAPS,
@@ -162,6 +173,8 @@ if TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
         make_law,
     )
     from .episodes import ContactEpisode, contact_episodes
+    from .filters import cfc_filter
+    from .measured import Comparison, MeasuredPulse, compare, read_pulse_csv, sprague_geers
     from .errors import HertzChainError, ParameterError, SolverError, StackFileError
     from .materials import Material, contact_stiffness, effective_mass, material, material_names
     from .constants import G0, STANDARD_GRAVITY
@@ -200,6 +213,7 @@ if TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
         simulate_batch,
     )
     from .srs import ShockResponseSpectrum, octave_frequencies, srs
+    from .standards import CheckResult, ShockCondition, check, find_condition
     from .status import Status
     from .stack import Stack, State, at_impact, dropped, resting, stack_designs
     from .stackfile import StackSpec, load_stack_file, parse_stack
