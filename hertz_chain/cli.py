@@ -182,7 +182,8 @@ def simulate(
     typer.echo(report.to_json(result) if as_json else report.summary_table(result))
     try:
         if output is not None:
-            _paths.write_atomically(output, lambda tmp: report.write_output(result, tmp), force, "--output")
+            meta = {"title": spec.title, "source_file": str(stack_file)}
+            _paths.write_atomically(output, lambda tmp: report.write_output(result, tmp, meta), force, "--output")
         if plot is not None:
             from . import plot as plotting
 

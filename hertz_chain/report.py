@@ -220,76 +220,148 @@ def summary_table(report: Report, title: str | None = None) -> str:
 
 
 # ------------------------------------------------------------------------------------------ files
-def to_dataset(report: Report):
-    """Time histories (at the solver's steps) and results as an `xarray.Dataset`, units in attrs."""
+def _history(report: Report):
+    """The time history to export: the uniform grid the stack file asked for (`solver.dt_output` /
+    `solver.n_output`: samples of the dense solution) when there is one, else the solver's steps."""
+    sol = report.solution
+    grid = getattr(sol, "grid", None)
+    if grid is not None:
+        keep = np.isfinite(grid.positions).all(axis=-1)
+        import dataclasses as _dc
+
+        return _dc.replace(grid, **{f.name: getattr(grid, f.name)[keep] for f in _dc.fields(grid)
+                                    if getattr(grid, f.name) is not None}), "uniform grid of the dense solution"
+    return sol.steps, "the solver's adaptive steps"
+
+
+def _metadata(meta: dict | None) -> dict:
+    """Provenance of an export: title, input file, package version, date and command."""
+    import datetime
+    import sys
+
+    from . import __version__
+
+    meta = dict(meta or {})
+    now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    command = " ".join(["hertz-chain", *sys.argv[1:]]) if sys.argv and "hertz-chain" in sys.argv[0] else "hertz_chain"
+    return {"title": meta.get("title") or "hertz_chain simulation", "source_file": meta.get("source_file") or "",
+            "version": f"hertz_chain {__version__}", "history": f"{now} {command}"}
+
+
+_ACC_G = "in units of standard gravity g0 = 9.80665 m s-2"
+
+
+def to_dataset(report: Report, meta: dict | None = None):
+    """Time histories and results as a CF-1.10 `xarray.Dataset` (UDUNITS units, `long_name` on every
+    variable, `standard_name` where CF has one, and the provenance in the global attributes). The time
+    history is the file's uniform output grid when it asks for one, else the solver's steps (the
+    `time_sampling` attribute says which). Accelerations in g are ratios to standard gravity (units
+    `1`); the SRS is in m s-2."""
     import xarray as xr
 
-    st = report.solution.steps
+    st, sampling = _history(report)
     n = len(report.masses)
     mass = np.arange(1, n + 1)
     interface = np.arange(n)
-    a_g = (st.accelerations + float(report.solution.stack.gravity)) / G0
+    g = float(report.solution.stack.gravity)
+    a_g = (st.accelerations + g) / G0
     data = {
-        "position": (("time", "mass"), st.positions, {"units": "m", "long_name": "position (upward)"}),
-        "velocity": (("time", "mass"), st.velocities, {"units": "m/s", "long_name": "velocity (upward)"}),
-        "acceleration": (("time", "mass"), st.accelerations, {"units": "m/s^2"}),
+        "position": (("time", "mass"), st.positions, {"units": "m", "long_name": "position of the mass (upward)"}),
+        "velocity": (("time", "mass"), st.velocities, {"units": "m s-1", "long_name": "velocity of the mass (upward)"}),
+        "acceleration": (("time", "mass"), st.accelerations,
+                         {"units": "m s-2", "long_name": "acceleration of the mass (upward, gravity included)"}),
         "acceleration_g": (("time", "mass"), a_g,
-                           {"units": "g", "long_name": "contact acceleration (a + g) / 9.80665"}),
-        "overlap": (("time", "interface"), st.overlaps, {"units": "m", "long_name": "overlap (>0 compression)"}),
-        "force": (("time", "interface"), st.forces, {"units": "N"}),
-        "dissipated": (("time", "interface"), st.dissipated, {"units": "J"}),
-        "energy": (("time",), st.energy, {"units": "J", "long_name": "kinetic+gravitational+elastic+dissipated"}),
-        "mass_kg": (("mass",), report.masses, {"units": "kg"}),
-        "launch_velocity": (("mass",), report.launch_velocities, {"units": "m/s"}),
-        "velocity_gain": (("mass",), report.velocity_gains, {"units": "1"}),
-        "restitution_measured": (("interface",), report.restitution, {"units": "1"}),
+                           {"units": "1", "long_name": f"accelerometer reading (a + g) {_ACC_G}"}),
+        "overlap": (("time", "interface"), st.overlaps,
+                    {"units": "m", "long_name": "overlap of the interface (> 0 compression)"}),
+        "force": (("time", "interface"), st.forces, {"units": "N", "long_name": "contact force of the interface"}),
+        "dissipated": (("time", "interface"), st.dissipated,
+                       {"units": "J", "long_name": "energy dissipated in the interface so far"}),
+        "energy": (("time",), st.energy, {"units": "J", "long_name": "kinetic + gravitational + elastic + dissipated energy"}),
+        "mass_kg": (("mass",), report.masses, {"units": "kg", "long_name": "mass"}),
+        "launch_velocity": (("mass",), report.launch_velocities,
+                            {"units": "m s-1", "long_name": "velocity when the mass's last contact of the cascade ended"}),
+        "velocity_gain": (("mass",), report.velocity_gains,
+                          {"units": "1", "long_name": "launch velocity over the drop speed"}),
+        "restitution_measured": (("interface",), report.restitution,
+                                 {"units": "1", "long_name": "effective restitution of the interface's main impact"}),
     }
     if report.peak_velocities is not None:
         data["peak_velocity"] = (("mass",), report.peak_velocities,
-                                 {"units": "m/s", "long_name": "largest upward velocity in the first cascade"})
-        data["peak_velocity_time"] = (("mass",), report.peak_velocity_times, {"units": "s"})
+                                 {"units": "m s-1", "long_name": "largest upward velocity in the first cascade"})
+        data["peak_velocity_time"] = (("mass",), report.peak_velocity_times,
+                                      {"units": "s", "long_name": "time of the largest upward velocity"})
     strongest = {}  # per interface, the first-cascade episode with the largest force
     for ep in report.episodes:
         if ep.interface not in strongest or ep.peak_force > strongest[ep.interface].peak_force:
             strongest[ep.interface] = ep
     data["peak_force"] = (("interface",), [strongest[j].peak_force if j in strongest else np.nan for j in range(n)],
-                          {"units": "N", "long_name": "largest sampled contact force in the first cascade"})
+                          {"units": "N", "long_name": "largest contact force at the solver's steps in the first cascade "
+                           "(the exported force history's maximum when it is sampled at the steps)"})
     data["peak_force_time"] = (("interface",),
                                [strongest[j].peak_force_time if j in strongest else np.nan for j in range(n)],
                                {"units": "s", "long_name": "time of that peak (parabola through the samples)"})
-    pulse_fields = (("pulse_peak_g", "peak_g", "g"), ("pulse_duration", "duration_10", "s"),
-                    ("pulse_rise_time", "rise_time", "s"), ("pulse_delta_v", "delta_v_main", "m/s"),
-                    ("pulse_half_sine_duration", "equivalent_half_sine_duration", "s"))
-    for name, field, unit in pulse_fields:  # every mass's main pulse; NaN for a mass without contact
+    pulse_fields = (("pulse_peak_g", "peak_g", "1", f"peak of the mass's main pulse {_ACC_G}"),
+                    ("pulse_duration", "duration_10", "s", "width of the main pulse between its 10 % points"),
+                    ("pulse_rise_time", "rise_time", "s", "10 % to 90 % rise time of the main pulse"),
+                    ("pulse_delta_v", "delta_v_main", "m s-1", "velocity change over the main pulse"),
+                    ("pulse_half_sine_duration", "equivalent_half_sine_duration", "s",
+                     "duration of the half-sine with the same peak and velocity change"))
+    for name, field, unit, long in pulse_fields:  # every mass's main pulse; NaN for a mass without contact
         values = [np.nan if pm is None else float(getattr(pm, field)) for pm in report.pulses]
-        data[name] = (("mass",), np.asarray(values), {"units": unit})
+        data[name] = (("mass",), np.asarray(values), {"units": unit, "long_name": long})
     if report.rigid.nominal_restitution is not None:
-        data["restitution_nominal"] = (("interface",), report.rigid.nominal_restitution, {"units": "1"})
-    coords = {"time": ("time", st.t, {"units": "s"}), "mass": mass, "interface": interface}
+        data["restitution_nominal"] = (("interface",), report.rigid.nominal_restitution,
+                                       {"units": "1", "long_name": "restitution the interface was designed for"})
+    coords = {"time": ("time", st.t, {"units": "s", "standard_name": "time", "long_name": "time since impact",
+                                      "axis": "T"}),
+              "mass": ("mass", mass, {"units": "1", "long_name": "mass number, bottom = 1"}),
+              "interface": ("interface", interface,
+                            {"units": "1", "long_name": "interface number: 0 = ground-mass 1, j = mass j-mass j+1"})}
     if report.top_srs is not None:
-        coords["frequency"] = ("frequency", report.top_srs.frequencies_Hz, {"units": "Hz"})
-        data["srs_maximax"] = (("frequency",), report.top_srs.maximax, {"units": "g", "Q": report.top_srs.Q})
-        data["srs_primary"] = (("frequency",), report.top_srs.primary, {"units": "g"})
-        data["srs_residual"] = (("frequency",), report.top_srs.residual, {"units": "g"})
+        s = report.top_srs
+        coords["frequency"] = ("frequency", s.frequencies_Hz, {"units": "Hz", "long_name": "natural frequency"})
+        for part in ("maximax", "primary", "residual"):
+            data[f"srs_{part}"] = (("frequency",), getattr(s, part) * G0,
+                                   {"units": "m s-2", "Q": s.Q,
+                                    "long_name": f"{part} shock response spectrum of the top mass's pulse "
+                                                 f"(absolute acceleration, Q = {s.Q:g})"})
     attrs = {k: (int(v) if isinstance(v, bool) else v) for k, v in to_dict(report).items()
              if isinstance(v, (str, int, float)) and v is not None}
     attrs["rigid_json"] = json.dumps(to_dict(report)["rigid"])
-    attrs["conventions"] = ("SI units; masses numbered from the bottom; interface 0 = ground-mass 1, "
-                            "interface j = mass j - mass j+1")
+    attrs["hertz_chain_conventions"] = ("SI units; masses numbered from the bottom; interface 0 = ground-mass 1, "
+                                        "interface j = mass j - mass j+1")
+    attrs["time_sampling"] = sampling
+    attrs["standard_gravity_m_s2"] = G0
+    attrs.update(_metadata(meta))
+    attrs["Conventions"] = "CF-1.10"
+    attrs["source"] = f"{attrs['version']}, {model_label(report)} model"
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
-def write_output(report: Report, path: str | Path) -> None:
-    """Write `.nc` (the full `to_dataset`) or `.csv` (time, top-mass acceleration in m/s² and g)."""
+def write_output(report: Report, path: str | Path, meta: dict | None = None) -> None:
+    """Write `.nc` (the CF `to_dataset`, compressed) or `.csv` (time, the top mass's accelerometer in
+    m/s² and in g, its velocity), the history on the file's uniform grid when it asks for one.
+    `meta`: `title` and `source_file` for the provenance. The CSV starts with `#` comment lines: the
+    title, the input file, the version, the date, the units and the sampling."""
     path = Path(path)
     if path.suffix.lower() == ".nc":
-        to_dataset(report).to_netcdf(path, engine="h5netcdf")
+        ds = to_dataset(report, meta)
+        encoding = {name: {"zlib": True, "complevel": 4} for name in ds.data_vars
+                    if np.issubdtype(ds[name].dtype, np.number)}
+        ds.to_netcdf(path, engine="h5netcdf", encoding=encoding)
     else:
-        st = report.solution.steps
+        st, sampling = _history(report)
         a = st.accelerations[:, -1] + float(report.solution.stack.gravity)
         table = np.column_stack([st.t, a, a / G0, st.velocities[:, -1]])
-        np.savetxt(path, table, delimiter=",", header="time_s,acceleration_mps2,acceleration_g,velocity_mps",
-                   comments="")
+        m = _metadata(meta)
+        head = [f"{m['title']}", f"input file: {m['source_file'] or '(none)'}", f"written by {m['version']}; {m['history']}",
+                f"top mass (mass {len(report.masses)}), {model_label(report)} model; time sampling: {sampling}",
+                "columns: time (s); accelerometer a + g (m/s^2); the same in g (9.80665 m/s^2); velocity (m/s, upward)"]
+        with open(path, "w", encoding="utf-8") as f:
+            f.writelines(f"# {line}\n" for line in head)
+            f.write("time_s,acceleration_mps2,acceleration_g,velocity_mps\n")
+            np.savetxt(f, table, delimiter=",")
 
 
 # ------------------------------------------------------------------------------------------ design

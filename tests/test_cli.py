@@ -62,18 +62,20 @@ def test_outputs_and_no_overwrite(tmp_path):
     assert res.exit_code == 0, res.output
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     ds = xr.open_dataset(nc, engine="h5netcdf")
-    assert ds["velocity"].attrs["units"] == "m/s" and ds["time"].attrs["units"] == "s"
+    assert ds["velocity"].attrs["units"] == "m s-1" and ds["time"].attrs["units"] == "s"
     assert ds.sizes["mass"] == 6
     # per-mass pulse metrics; the top one goes from -v_ff to G v_ff (Eq 19): delta V = (G + 1) v_ff
     g = eq19([8.4, 3.4683, 1.4320, 0.5913, 0.2441, 0.1008], 0.8)
-    assert ds["pulse_delta_v"].attrs["units"] == "m/s"
+    assert ds["pulse_delta_v"].attrs["units"] == "m s-1"
     assert float(ds["pulse_delta_v"][-1]) == pytest.approx(g + 1, rel=1e-6)
     assert np.all(np.isfinite(ds["pulse_peak_g"].values))  # every mass is struck
     ds.close()
     res = runner.invoke(app, ["simulate", str(NORMATIVE), "--output", str(csv)])
     assert res.exit_code == 0
-    header = csv.read_text().splitlines()[0]
+    lines = csv.read_text().splitlines()
+    header = next(ln for ln in lines if not ln.startswith("#"))
     assert header == "time_s,acceleration_mps2,acceleration_g,velocity_mps"
+    assert any(str(NORMATIVE) in ln for ln in lines if ln.startswith("#"))  # the commented metadata header
     before = csv.read_text()
     res = runner.invoke(app, ["simulate", str(NORMATIVE), "--output", str(csv)])
     assert res.exit_code == 2 and "--force" in res.output
