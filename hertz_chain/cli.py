@@ -3,8 +3,9 @@
 Commands:
 
 - `hertz-chain design --ratio R --restitution e` — the paper's optimal MVG and MET designs.
-- `hertz-chain simulate STACK.toml [--json] [--plot F.png] [--output F.nc|F.csv]` — simulate a stack
-  file and compare with the rigid model.
+- `hertz-chain simulate STACK.toml [--json] [--plot F.png] [--output F.nc|F.csv] [--set KEY=VALUE ...]`
+  — simulate a stack file and compare with the rigid model; `--set` overrides a key of the file
+  (`--set drop.height="30 cm"`; also for `check` and `compare`).
 - `hertz-chain optimize STACK.toml [--json] [--write OUT.toml] [--plot F.png]` — the best stack under
   compliant contacts (`hertz_chain.optimize`; exit 0 converged, 3 not converged, 5 failed).
 - `hertz-chain sweep STACK.toml --output OUT.zarr [--workers N | --scheduler ADDR] [--resume] [--json]` —
@@ -155,6 +156,7 @@ def simulate(
     plot: Optional[Path] = typer.Option(None, "--plot", help="Write a figure (PNG)."),
     output: Optional[Path] = typer.Option(None, "--output", "-o", help="Write .nc (NetCDF) or .csv."),
     force: bool = typer.Option(False, "--force", help="Overwrite existing output files."),
+    overrides: list[str] = typer.Option([], "--set", help="Override a stack-file key: --set drop.height=\"30 cm\" (repeatable)."),
 ) -> None:
     """Simulate a stack file with compliant contacts and compare it with the rigid model."""
     from . import _paths
@@ -167,7 +169,7 @@ def simulate(
             _paths.check_output_path(output, "--output", OUTPUT_SUFFIXES, force)
         if plot is not None:
             _paths.check_output_path(plot, "--plot", PLOT_SUFFIXES, force)
-        spec = load_stack_file(stack_file)
+        spec = load_stack_file(stack_file, overrides)
     except HertzChainError as exc:
         _fail(str(exc))
     from . import report, workflow
@@ -310,6 +312,7 @@ def check(
     as_json: bool = typer.Option(False, "--json", help="Print the result as JSON."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Draw the pulse inside its band (PNG)."),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing plot."),
+    overrides: list[str] = typer.Option([], "--set", help="Override a stack-file key: --set drop.height=\"30 cm\" (repeatable)."),
 ) -> None:
     """Check the top pulse against a shock-test condition: peak, duration, velocity change, band (exit 1 on FAIL)."""
     from . import _paths
@@ -325,15 +328,15 @@ def check(
             _paths.check_output_path(plot, "--plot", PLOT_SUFFIXES, force)
         from .stackfile import load_stack_file
 
-        load_stack_file(stack_file)
-        read_test_file(stack_file, standard)
+        load_stack_file(stack_file, overrides)
+        read_test_file(stack_file, standard, overrides)
     except HertzChainError as exc:
         _fail(str(exc))
     from . import report
     from .standards import check as run_check
 
     try:
-        result_report, result = run_check(stack_file, standard)
+        result_report, result = run_check(stack_file, standard, overrides)
     except SolverError as exc:
         typer.echo(f"hertz-chain: {Status.FAILED.text}: {_one_line(exc)}", err=True)
         raise typer.Exit(code=Status.FAILED.exit_code)
@@ -366,6 +369,7 @@ def compare(
     as_json: bool = typer.Option(False, "--json", help="Print the comparison as JSON."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Overlay the pulses and their SRS (PNG)."),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing plot."),
+    overrides: list[str] = typer.Option([], "--set", help="Override a stack-file key: --set drop.height=\"30 cm\" (repeatable)."),
 ) -> None:
     """Compare the model's top pulse with a measured pulse: metrics, SRS and Sprague-Geers errors."""
     from . import _paths
@@ -382,7 +386,7 @@ def compare(
                 _fail(f"--cfc = {cfc} is invalid: one of {', '.join(map(str, CFC_CLASSES))}")
         if plot is not None:
             _paths.check_output_path(plot, "--plot", PLOT_SUFFIXES, force)
-        spec = load_stack_file(stack_file)
+        spec = load_stack_file(stack_file, overrides)
         record = read_pulse_csv(measured, time_unit=time_unit, accel_unit=accel_unit)
     except HertzChainError as exc:
         _fail(str(exc))

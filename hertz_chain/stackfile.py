@@ -1229,8 +1229,43 @@ def parse_stack(data: Mapping | str, *, source: str | None = None) -> StackSpec:
     return spec
 
 
-def load_stack_file(path: str | Path) -> StackSpec:
-    """Read and validate a stack file (TOML with units); the format is docs/stack-files.md."""
+def apply_overrides(data: Mapping, overrides) -> dict:
+    """A copy of the parsed stack file `data` with `KEY=VALUE` overrides set (the command line's
+    `--set`): `KEY` a dotted path into the file's tables (`drop.height`, `contact.restitution`,
+    `solver.rtol`), `VALUE` a TOML value (`0.7`, `"30 cm"`, `[1, 0.5]`, `true`) or, when it is not one,
+    the text itself (`30 cm`). Sections and keys are created as needed; the stack-file checks then
+    judge the result as they would the file.
+
+    **Raises:** `StackFileError` (`--set ...`) for a malformed override or a key that crosses a value.
+    """
+    import copy
+    import tomllib
+
+    out = copy.deepcopy(dict(data))
+    for item in overrides or ():
+        key, sep, raw = str(item).partition("=")
+        key = key.strip()
+        parts = key.split(".")
+        if not sep or not key or not all(re.fullmatch(r"[A-Za-z0-9_\-]+", p_) for p_ in parts):
+            raise _error(None, f"--set {item!r}: expected KEY=VALUE with a dotted key, e.g. drop.height=\"30 cm\"")
+        try:
+            value = tomllib.loads(f"v = {raw.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = raw.strip()  # plain text: a quantity such as 30 cm
+        node = out
+        for i, p_ in enumerate(parts[:-1]):
+            nxt = node.setdefault(p_, {})
+            if not isinstance(nxt, dict):
+                raise _error(None, f"--set {key}: {'.'.join(parts[: i + 1])} is a value, not a section")
+            node = nxt
+        node[parts[-1]] = value
+    return out
+
+
+def load_stack_file(path: str | Path, overrides=None) -> StackSpec:
+    """Read and validate a stack file (TOML with units); the format is docs/stack-files.md.
+    `overrides`: `KEY=VALUE` strings applied before the checks (`apply_overrides`); an error caused by
+    one names the key as the file would."""
     path = Path(path)
     try:
         if path.is_dir():
@@ -1249,4 +1284,12 @@ def load_stack_file(path: str | Path) -> StackSpec:
         raise _error(None, f"{path}: cannot read it ({exc.strerror or exc})") from None
     except ValueError as exc:  # e.g. a NUL byte in the path
         raise _error(None, f"{_show(str(path))}: not a usable path ({exc})") from None
+    if overrides:
+        import tomllib
+
+        try:
+            data = tomllib.loads(text.removeprefix("\ufeff"))
+        except tomllib.TOMLDecodeError as exc:
+            raise _error(None, f"{path}: invalid TOML: {exc}") from None
+        return parse_stack(apply_overrides(data, overrides), source=f"{path} (with --set)")
     return parse_stack(text, source=str(path))

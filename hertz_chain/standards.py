@@ -402,14 +402,16 @@ def parse_test(raw, standard: str | None = None) -> TestSpec:
     return TestSpec(name="user-defined", source="the stack file's [test] section", **over)
 
 
-def read_test_file(path, standard: str | None = None) -> TestSpec:
-    """The `TestSpec` of a stack file's `[test]` section (or of `standard` alone). Errors name the file."""
+def read_test_file(path, standard: str | None = None, overrides=None) -> TestSpec:
+    """The `TestSpec` of a stack file's `[test]` section (or of `standard` alone), after the `--set`
+    `overrides` (`stackfile.apply_overrides`). Errors name the file."""
     import tomllib
 
     from .errors import StackFileError
+    from .stackfile import apply_overrides
 
     try:
-        doc = tomllib.loads(Path(path).read_text(encoding="utf-8-sig"))
+        doc = apply_overrides(tomllib.loads(Path(path).read_text(encoding="utf-8-sig")), overrides)
     except (OSError, tomllib.TOMLDecodeError) as exc:
         raise StackFileError(f"{path}: {exc}") from None
     if "test" not in doc and standard is None:
@@ -437,8 +439,9 @@ def pulse_record(report, spec: TestSpec, samples_per_duration: int = 400):
     return t, accelerometer(report, t)
 
 
-def check(path, standard: str | None = None):
-    """Simulate a stack file and check its top pulse against its `[test]` section or `standard`.
+def check(path, standard: str | None = None, overrides=None):
+    """Simulate a stack file and check its top pulse against its `[test]` section or `standard`
+    (`overrides`: `KEY=VALUE` strings, as the command line's `--set`).
 
     **Returns:** `(report, result)`: the `Report` of the run and the :class:`CheckResult` (which holds
     the checked record, `pulse_record`, in `t` and `a`).
@@ -448,8 +451,8 @@ def check(path, standard: str | None = None):
     from .stackfile import load_stack_file
     from .workflow import run_spec
 
-    spec_file = load_stack_file(path)
-    spec = read_test_file(path, standard)
+    spec_file = load_stack_file(path, overrides)
+    spec = read_test_file(path, standard, overrides)
     report = run_spec(spec_file)
     if report.top_pulse is None:
         raise ParameterError("stack", "no top pulse", "a run in which the top mass was struck")

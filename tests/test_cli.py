@@ -138,3 +138,22 @@ def test_design_command():
     assert table.exit_code == 0 and "MVG/MET" in table.stdout and "5.0407" in table.stdout
     res = runner.invoke(app, ["design", "-R", "1.5", "-e", "0.8"])
     assert res.exit_code == 2 and "R" in res.output
+
+
+def test_set_overrides_a_key_like_editing_the_file(tmp_path):
+    """`--set KEY=VALUE` gives what the edited file gives (the reference: the file written with the new
+    value), leaves the user's file untouched, and a bad override is one line with exit 2."""
+    edited = tmp_path / "edited.toml"
+    edited.write_text(NORMATIVE.read_text().replace('impact_velocity = "1 m/s"', 'impact_velocity = "2 m/s"'))
+    assert edited.read_text() != NORMATIVE.read_text()
+    before = NORMATIVE.read_text()
+    ref = runner.invoke(app, ["simulate", str(edited), "--json"])
+    res = runner.invoke(app, ["simulate", str(NORMATIVE), "--json", "--set", 'drop.impact_velocity="2 m/s"'])
+    assert res.exit_code == 0 == ref.exit_code, res.output
+    a, b = json.loads(res.stdout), json.loads(ref.stdout)
+    assert a["launch_velocities_mps"] == b["launch_velocities_mps"]
+    assert NORMATIVE.read_text() == before
+    for bad, needle in (("drop.impact_velocity=2 kg", "drop.impact_velocity"), ("drop", "KEY=VALUE"),
+                        ("drop.impact_velocity.x=1", "is a value")):
+        res = runner.invoke(app, ["simulate", str(NORMATIVE), "--set", bad])
+        assert res.exit_code == 2 and needle in res.output and len(res.output.strip().splitlines()) == 1
