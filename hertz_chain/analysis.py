@@ -37,7 +37,7 @@ from .errors import HertzChainError, ParameterError, SolverError
 from .pulse import G0, PulseMetrics, pulse_metrics
 from .rigid import chain_gain, stack_gain
 from .rigid_events import simulate_rigid
-from .srs import (DEFAULT_PPC, ShockResponseSpectrum, _active_sample_rate, octave_frequencies,
+from .srs import (DEFAULT_PPC, ShockResponseSpectrum, SRSOptions, _active_sample_rate, octave_frequencies,
                   resample_uniform, srs)
 from .status import Status
 
@@ -228,14 +228,16 @@ def _pulse(t, a, v) -> PulseMetrics | None:
 SRS_BAND_HZ = (100.0, 10_000.0)
 
 
-def _top_srs(t, a_g, v_g, episodes, top_if) -> ShockResponseSpectrum | None:
-    """Maximax SRS (Q = 10, 1/12 octave) of the top mass's own contact (`top_if`: the interface below
-    it), over `[min(100 Hz, 0.1/D), max(10 kHz, 20/D)]` (D: the pulse's 10 % duration). `a_g`, `v_g`:
-    the accelerometer's acceleration and its running integral, in g and g·s. When the solver's steps
-    sample the pulse more coarsely than 50 points per cycle at the top of the band, the filter runs on
-    the dense solution instead: the slope of the cubic Hermite interpolant of the velocity with the
-    acceleration (`episodes.hermite_slope`), not on straight lines between steps; the band is never
-    narrowed to what the steps resolve."""
+def _top_srs(t, a_g, v_g, episodes, top_if, options=None) -> ShockResponseSpectrum | None:
+    """The SRS of the top mass's own contact (`top_if`: the interface below it), as `options`
+    (`srs.SRSOptions`; default maximax absolute acceleration, Q = 10, 1/12 octave) say, over their band
+    or by default `[min(100 Hz, 0.1/D), max(10 kHz, 20/D)]` (D: the pulse's 10 % duration). `a_g`, `v_g`:
+    the accelerometer's acceleration and its running integral, in g and g·s; an acceleration SRS comes
+    back in g, a pseudo-velocity SRS in m/s. When the solver's steps sample the pulse more coarsely than
+    50 points per cycle at the top of the band, the filter runs on the dense solution instead: the slope
+    of the cubic Hermite interpolant of the velocity with the acceleration (`episodes.hermite_slope`),
+    not on straight lines between steps; the band is never narrowed to what the steps resolve."""
+    opts = options if options is not None else SRSOptions()
     eps = [ep for ep in episodes if ep.interface in top_if]
     if not eps:
         return None
@@ -246,23 +248,30 @@ def _top_srs(t, a_g, v_g, episodes, top_if) -> ShockResponseSpectrum | None:
         return None
     tk, ak = t[keep], a_g[keep]
     try:
-        duration = pulse_metrics(tk, ak).duration_10
-        step = 2.0 ** (1 / 12) * (1 + 1e-12)  # one grid point at or beyond each end of the band
-        freqs = octave_frequencies(min(SRS_BAND_HZ[0], 0.1 / duration) / step, max(SRS_BAND_HZ[1], 20.0 / duration) * step)
+        step = 2.0 ** (1 / opts.per_octave) * (1 + 1e-12)  # one grid point at or beyond each end of the band
+        if opts.band is not None:
+            lo, hi = opts.band
+        else:
+            duration = pulse_metrics(tk, ak).duration_10
+            lo, hi = min(SRS_BAND_HZ[0], 0.1 / duration), max(SRS_BAND_HZ[1], 20.0 / duration)
+        freqs = octave_frequencies(lo / step, hi * step, opts.per_octave)
         t_end = float(tk[tk <= t1][-1])
         rate = DEFAULT_PPC * freqs[-1]
         if _active_sample_rate(tk, ak) < rate:  # too coarse: the dense solution, t_end kept on the grid
             tk, _, _ = resample_uniform(tk, ak, rate, anchor=t_end)
             tk = np.minimum(tk, t[keep][-1])
             ak = hermite_slope(t[keep], v_g[keep], a_g[keep], tk)
+        scale = G0 if opts.kind == "pseudo-velocity" else 1.0  # pseudo-velocity from m/s² -> m/s
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            return srs(tk, ak, freqs, on_coarse="ignore", pulse_end=t_end)
+            return srs(tk, ak * scale, freqs, Q=opts.Q, on_coarse="ignore", pulse_end=t_end, peak=opts.peak,
+                       kind=opts.kind)
     except HertzChainError:
         return None
 
 
-def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = None) -> Report:
+def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = None,
+            srs_options: SRSOptions | None = None) -> Report:
     """Analyse a `hertz_chain.Solution` (see the module docstring for every quantity).
 
     **Arguments:**
@@ -271,6 +280,8 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     - `nominal_restitution`: `(n,)` the restitution each interface was designed for (entry 0 = ground;
       entry 0 ignored without the ground), for the nominal rigid prediction; None skips it.
     - `tolerances`: optional `{"rtol": ..., "atol": ...}` the solve used, for the warnings.
+    - `srs_options`: how the top SRS is computed (`hertz_chain.srs.SRSOptions`; the stack file's
+      `[srs]`); default maximax absolute acceleration, Q = 10, 1/12 octave, the default band.
 
     Episodes that start after their interface's last contact of the first cascade
     (`Solution.contact_end_times`) are `rebounds`: listed on their own, kept out of the restitutions,
@@ -320,7 +331,8 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     # the top mass's own contact only: interface n - 1 (its neighbour below, or the ground when n = 1)
     top_if = {n - 1} if (n >= 2 or ground) else set()
     keep = cut(n - 1)
-    top_srs = _top_srs(st.t[keep], a_contact[keep, -1] / G0, v_contact[keep, -1] / G0, episodes, top_if)
+    top_srs = _top_srs(st.t[keep], a_contact[keep, -1] / G0, v_contact[keep, -1] / G0, episodes, top_if,
+                       srs_options)
     ind = independence(episodes, interfaces)
     rigid = _rigid_comparison(sol, e_meas, nominal_restitution, v_ref)
     regime = "independent" if ind < INDEPENDENT_BELOW else "overlapping"

@@ -67,6 +67,18 @@ def _pulse_dict(pm) -> dict | None:
     }
 
 
+def _srs_dict(srs) -> dict:
+    """The top SRS: what it is (`type`, `peak`, `Q`, `units`) and its spectra; an acceleration SRS also
+    under the historical keys `maximax_g`, `primary_g`, `residual_g`."""
+    unit = "g" if srs.kind == "acceleration" else "m/s"
+    out = {"type": srs.kind, "peak": srs.peak, "Q": srs.Q, "units": unit,
+           "frequencies_Hz": _nums(srs.frequencies_Hz), "maximax": _nums(srs.maximax),
+           "primary": _nums(srs.primary), "residual": _nums(srs.residual)}
+    if srs.kind == "acceleration":
+        out.update(maximax_g=out["maximax"], primary_g=out["primary"], residual_g=out["residual"])
+    return out
+
+
 def to_dict(report: Report) -> dict:
     """The report as plain JSON-ready data (SI units; `null` for undefined values)."""
     top = report.top_pulse
@@ -101,13 +113,7 @@ def to_dict(report: Report) -> dict:
         "rebounds": [_episode_dict(ep) for ep in report.rebounds],
         "top_pulse": _pulse_dict(top),
         "pulses": [_pulse_dict(pm) for pm in report.pulses],  # every mass, bottom first
-        "top_srs": None if srs is None else {
-            "Q": srs.Q,
-            "frequencies_Hz": _nums(srs.frequencies_Hz),
-            "maximax_g": _nums(srs.maximax),
-            "primary_g": _nums(srs.primary),
-            "residual_g": _nums(srs.residual),
-        },
+        "top_srs": None if srs is None else _srs_dict(srs),
         "independence": _num(report.independence),
         "regime": report.regime,
         "energy_error": _num(report.energy_error),
@@ -199,9 +205,11 @@ def summary_table(report: Report, title: str | None = None) -> str:
                      f"ΔV {top.delta_v_main:.4g} m/s, equivalent half-sine {top.equivalent_half_sine_duration * 1e3:.4g} ms, "
                      f"{top.n_pulses} pulse(s)")
     if r.top_srs is not None:
-        k = int(np.argmax(r.top_srs.maximax))
-        lines.append(f"top SRS (Q = {r.top_srs.Q:g}): max {r.top_srs.maximax[k]:,.0f} g at "
-                     f"{r.top_srs.frequencies_Hz[k]:,.0f} Hz")
+        s_ = r.top_srs
+        k = int(np.argmax(s_.maximax))
+        what = "" if (s_.kind, s_.peak) == ("acceleration", "abs") else f", {s_.kind}, {s_.peak}"
+        value = f"{s_.maximax[k]:,.0f} g" if s_.kind == "acceleration" else f"{s_.maximax[k]:.4g} m/s"
+        lines.append(f"top SRS (Q = {s_.Q:g}{what}): max {value} at {s_.frequencies_Hz[k]:,.0f} Hz")
     lines.append(f"regime: {r.regime} (neighbouring contacts overlap {r.independence:.1%} of the "
                  "shorter contact time; the rigid theory assumes 0%)")
     if r.rebounds:
@@ -321,11 +329,13 @@ def to_dataset(report: Report, meta: dict | None = None):
     if report.top_srs is not None:
         s = report.top_srs
         coords["frequency"] = ("frequency", s.frequencies_Hz, {"units": "Hz", "long_name": "natural frequency"})
+        acc = s.kind == "acceleration"
         for part in ("maximax", "primary", "residual"):
-            data[f"srs_{part}"] = (("frequency",), getattr(s, part) * G0,
-                                   {"units": "m s-2", "Q": s.Q,
+            data[f"srs_{part}"] = (("frequency",), getattr(s, part) * (G0 if acc else 1.0),
+                                   {"units": "m s-2" if acc else "m s-1", "Q": s.Q, "peak": s.peak,
                                     "long_name": f"{part} shock response spectrum of the top mass's pulse "
-                                                 f"(absolute acceleration, Q = {s.Q:g})"})
+                                                 f"({'absolute acceleration' if acc else 'pseudo-velocity'}, "
+                                                 f"peak {s.peak}, Q = {s.Q:g})"})
     attrs = {k: (int(v) if isinstance(v, bool) else v) for k, v in to_dict(report).items()
              if isinstance(v, (str, int, float)) and v is not None}
     attrs["rigid_json"] = json.dumps(to_dict(report)["rigid"])

@@ -77,6 +77,10 @@ from .errors import ParameterError
 from .pulse import _validate, pulse_metrics
 
 __all__ = [
+    "SRSOptions",
+    "PEAKS",
+    "KINDS",
+    "relative_displacement_coefficients",
     "ShockResponseSpectrum",
     "SRSResolutionWarning",
     "octave_frequencies",
@@ -91,6 +95,46 @@ __all__ = [
 DEFAULT_PPC = 50.0
 #: Points per cycle below which the input record is said not to resolve a natural frequency.
 MIN_PPC = 10.0
+
+
+#: Which extreme of the response a spectrum takes: the largest magnitude, or the largest positive or
+#: negative value (`pyyeti.srs.srs`'s `peak`).
+PEAKS = ("abs", "pos", "neg")
+#: What the spectrum is of: the absolute acceleration of the oscillator, or its pseudo-velocity
+#: `ω·z` (z the relative displacement; `pyyeti.srs.srs`'s `stype="pvelo"`).
+KINDS = ("acceleration", "pseudo-velocity")
+
+
+@dataclasses.dataclass(frozen=True)
+class SRSOptions:
+    """How a report's SRS is computed (the stack file's `[srs]` section).
+
+    - `Q`: amplification factor `1/(2ζ)` (10);
+    - `per_octave`: points per octave of the frequency grid (12);
+    - `band`: `(f_min, f_max)` in Hz, or None for the default band (at least 100 Hz-10 kHz and
+      `[0.1/D, 20/D]`);
+    - `peak`: `"abs"` (maximax), `"pos"` or `"neg"`;
+    - `kind`: `"acceleration"` (absolute, in g in the report) or `"pseudo-velocity"` (m/s).
+    """
+
+    Q: float = 10.0
+    per_octave: int = 12
+    band: tuple[float, float] | None = None
+    peak: str = "abs"
+    kind: str = "acceleration"
+
+    def __post_init__(self):
+        _check_q(self.Q)
+        if isinstance(self.per_octave, bool) or int(self.per_octave) != self.per_octave or not 1 <= self.per_octave <= 48:
+            raise ParameterError("per_octave", self.per_octave, "an integer number of points per octave, 1 to 48")
+        if self.band is not None:
+            lo, hi = (float(x) for x in self.band)
+            if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
+                raise ParameterError("band", self.band, "(f_min, f_max) in Hz with 0 < f_min < f_max")
+        if self.peak not in PEAKS:
+            raise ParameterError("peak", self.peak, f"one of {', '.join(PEAKS)}")
+        if self.kind not in KINDS:
+            raise ParameterError("kind", self.kind, f"one of {', '.join(KINDS)}")
 
 
 class SRSResolutionWarning(UserWarning):
@@ -119,6 +163,8 @@ class ShockResponseSpectrum:
     maximax: np.ndarray
     Q: float
     sample_rate_Hz: float
+    kind: str = "acceleration"  # or "pseudo-velocity" (`KINDS`)
+    peak: str = "abs"  # or "pos", "neg" (`PEAKS`)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -228,8 +274,38 @@ def _sinc_m1(x: np.ndarray) -> np.ndarray:
     return np.where(np.abs(x) < 0.1, series, direct)
 
 
+def relative_displacement_coefficients(frequencies_Hz, sample_rate: float, Q: float = 10.0):
+    """Ramp-invariant filter coefficients `(b, a)`, each `(len(f), 3)`, for the relative displacement
+    `z` of base-excited oscillators, `z'' + 2ζω z' + ω² z = −a(t)`: the first-order-hold discretisation
+    (`scipy.signal.cont2discrete(..., method="foh")`), exact for input linear between samples like
+    Smallwood's acceleration filter. The pseudo-velocity is `ω·z`.
+
+    The discretisation runs in the oscillator's own time `τ = ωt` (step `ωT`), where every entry of the
+    matrix exponential is O(1); in seconds the input column is O(T²) beside an O(1) identity and
+    loses its digits (6 % at `fs/f_n = 10⁵`). The transfer function of the 2×2 system is written out
+    (`b = [D, C·B − D·tr A_d, C·M·B + D·det A_d]`, `M = adj(zI − A_d) − zI`), not taken from
+    `scipy.signal.ss2tf`'s difference of polynomials."""
+    f = _check_frequencies(frequencies_Hz)
+    Q = _check_q(Q)
+    bs, as_ = [], []
+    for fj in f:
+        w = 2.0 * np.pi * fj
+        h = w / float(sample_rate)  # the step in units of 1/ω
+        A = np.array([[0.0, 1.0], [-1.0, -1.0 / Q]])
+        Ad, Bd, Cd, Dd, _ = signal.cont2discrete((A, np.array([[0.0], [-1.0]]), np.array([[1.0, 0.0]]),
+                                                  np.zeros((1, 1))), h, method="foh")
+        B, C, D = Bd[:, 0], Cd[0], float(Dd[0, 0])
+        tr, det = Ad[0, 0] + Ad[1, 1], Ad[0, 0] * Ad[1, 1] - Ad[0, 1] * Ad[1, 0]
+        M = np.array([[-Ad[1, 1], Ad[0, 1]], [Ad[1, 0], -Ad[0, 0]]])
+        b = np.array([D, C @ B - D * tr, C @ M @ B + D * det]) / (w * w)  # z = z_τ / ω² (input in m/s²)
+        bs.append(b)
+        as_.append(np.array([1.0, -tr, det]))
+    return np.array(bs), np.array(as_)
+
+
 def srs_uniform(
-    a, sample_rate: float, frequencies_Hz, Q: float = 10.0, *, n_primary: int | None = None
+    a, sample_rate: float, frequencies_Hz, Q: float = 10.0, *, n_primary: int | None = None,
+    peak: str = "abs", kind: str = "acceleration",
 ) -> ShockResponseSpectrum:
     """Maximax SRS of a uniformly sampled base acceleration `a` (any units; the SRS has the same).
 
@@ -240,7 +316,15 @@ def srs_uniform(
     residual includes the response at the last primary sample because `x''` is continuous
     (`u`, `u'` are), so `sup_{t > T} |x''|` includes its limit at `T`; pyyeti starts its residual one
     step later, which differs where the residual peaks at the end of the pulse (low `f_n·D`).
+
+    `peak` (`PEAKS`): the largest `abs`olute value (default), or the largest `pos`itive or `neg`ative
+    (reported as a magnitude). `kind` (`KINDS`): the absolute acceleration (default, in the input's
+    units) or the pseudo-velocity `ω·z` (`relative_displacement_coefficients`; input in m/s² gives m/s).
     """
+    if peak not in PEAKS:
+        raise ParameterError("peak", peak, f"one of {', '.join(PEAKS)}")
+    if kind not in KINDS:
+        raise ParameterError("kind", kind, f"one of {', '.join(KINDS)}")
     x = np.asarray(a, dtype=float)
     if x.ndim != 1 or x.size < 1 or not np.all(np.isfinite(x)):
         raise ParameterError("a", f"array of shape {x.shape}", "a non-empty 1-D array of finite values")
@@ -252,18 +336,24 @@ def srs_uniform(
     f = _check_frequencies(frequencies_Hz)
     Q = _check_q(Q)
     fs = float(sample_rate)
-    b, den = smallwood_coefficients(f, fs, Q)
+    if kind == "acceleration":
+        b, den = smallwood_coefficients(f, fs, Q)
+        scale = np.ones(f.size)
+    else:
+        b, den = relative_displacement_coefficients(f, fs, Q)
+        scale = 2.0 * np.pi * f
+    pick = {"abs": np.abs, "pos": lambda y: y, "neg": lambda y: -y}[peak]
     primary = np.empty(f.size)
     residual = np.empty(f.size)
     for j in range(f.size):  # one lfilter call per natural frequency (the time loop is in C)
         y, zf = signal.lfilter(b[j], den[j], x, zi=np.zeros(2))
-        primary[j] = np.max(np.abs(y[:n_primary]))
+        primary[j] = scale[j] * max(np.max(pick(y[:n_primary])), 0.0)
         yr, _ = signal.lfilter(b[j], den[j], np.zeros(math.ceil(fs / f[j]) + 1), zi=zf)
-        residual[j] = max(np.max(np.abs(yr)), np.max(np.abs(y[n_primary - 1 :])))
+        residual[j] = scale[j] * max(np.max(pick(yr)), np.max(pick(y[n_primary - 1 :])), 0.0)
     maximax = np.maximum(primary, residual)
     for arr in (f, primary, residual, maximax):
         arr.setflags(write=False)
-    return ShockResponseSpectrum(f, primary, residual, maximax, Q, fs)
+    return ShockResponseSpectrum(f, primary, residual, maximax, Q, fs, kind, peak)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -333,6 +423,8 @@ def srs(
     per_octave: int = 12,
     on_coarse: str = "warn",
     pulse_end: float | None = None,
+    peak: str = "abs",
+    kind: str = "acceleration",
 ) -> ShockResponseSpectrum:
     """Maximax SRS (primary, residual, overall) of the base acceleration `a` sampled at times `t`.
 
@@ -347,6 +439,8 @@ def srs(
     - `ppc`: points per cycle at the highest frequency of the grid the filter runs on (50).
     - `min_ppc`: points per cycle of the *input* below which it is called too coarse (10).
     - `on_coarse`: `"warn"` (:class:`SRSResolutionWarning`), `"raise"` (`ParameterError`) or `"ignore"`.
+    - `peak`, `kind`: as :func:`srs_uniform` (`"abs"`/`"pos"`/`"neg"`; `"acceleration"` or
+      `"pseudo-velocity"`).
     - `pulse_end`: time (s) that separates the primary part (`t <= pulse_end`) from the residual part
       (`t >= pulse_end`, the rest of the record and then the zero padding). Default: the end of the
       record (the ISO 18431-4 / pyyeti convention). A record that goes on, quiet, after the pulse
@@ -395,4 +489,4 @@ def srs(
     n_primary = None
     if pulse_end is not None:  # grid points at or before pulse_end (to a millionth of a step)
         n_primary = int(np.searchsorted(tu, pulse_end + 1e-6 / fs, side="right"))
-    return srs_uniform(x, fs, f, Q, n_primary=n_primary)
+    return srs_uniform(x, fs, f, Q, n_primary=n_primary, peak=peak, kind=kind)

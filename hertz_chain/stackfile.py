@@ -123,7 +123,9 @@ DAMPING_LIMITS = {name: (row.damping_max, f" {_UNITS[row.damping_dimension]}" if
 DESIGN_KINDS = ("mvg", "met")
 SHAPES = ("sphere", "flat")
 
-_TOP_KEYS = ("title", "drop", "stack", "ground", "contact", "materials", "solver", "optimize", "sweep", "test")
+_TOP_KEYS = ("title", "drop", "stack", "ground", "contact", "materials", "solver", "optimize", "sweep", "test",
+             "srs")
+_SRS_KEYS = ("q", "damping", "per_octave", "band", "peak", "type")
 # `optimize`, `sweep` and `test` are read by `hertz_chain.optimize`, `hertz_chain.sweep` and
 # `hertz_chain.standards` (docs/optimize.md, docs/lab-workflow.md,
 # docs/sweeps.md); simulating such a file runs its base stack
@@ -335,6 +337,18 @@ class SolverSpec:
 
 
 @dataclass(frozen=True)
+class SRSSpec:
+    """`[srs]`: how the report's SRS of the top pulse is computed (`hertz_chain.srs.SRSOptions`).
+    `band` in Hz, or None for the default band."""
+
+    q: float = 10.0
+    per_octave: int = 12
+    band: tuple[float, float] | None = None
+    peak: str = "abs"
+    type: str = "acceleration"
+
+
+@dataclass(frozen=True)
 class StackSpec:
     """A whole stack file, validated, in SI units. `ground` is `None` for a chain without ground."""
 
@@ -346,6 +360,7 @@ class StackSpec:
     materials: tuple[MaterialSpec, ...] = ()
     title: str | None = None
     source: str | None = None
+    srs: SRSSpec = SRSSpec()
 
     @property
     def n(self) -> int | None:
@@ -1046,6 +1061,33 @@ def _parse_solver(raw: Any) -> SolverSpec:
     return SolverSpec(solver, rtol, atol, t_max, max_steps, n_output, dt_output, until)
 
 
+def _parse_srs(raw: Any) -> SRSSpec:
+    t = _table(raw, "srs", _SRS_KEYS)
+    if "q" in t and "damping" in t:
+        raise _error("srs.damping", "conflicts with srs.q; give one of them (Q = 1/(2 damping))")
+    q = 10.0
+    if "q" in t:
+        q = _positive(t["q"], "srs.q", "dimensionless")
+        _check(q > 0.5, "srs.q", t["q"], "must be > 0.5 (an underdamped oscillator), e.g. 10")
+    if "damping" in t:
+        z = _positive(t["damping"], "srs.damping", "dimensionless")
+        _check(z < 1, "srs.damping", t["damping"], "must be in (0, 1) (the damping ratio, e.g. 0.05)")
+        q = 1.0 / (2.0 * z)
+    per_octave = _int(t["per_octave"], "srs.per_octave", 1, 48) if "per_octave" in t else 12
+    band = None
+    if "band" in t:
+        b = t["band"]
+        if not (isinstance(b, list) and len(b) == 2):
+            raise _error("srs.band", f"{_show(b)} is not a pair [f_min, f_max], e.g. [\"100 Hz\", \"10 kHz\"]")
+        lo = _positive(b[0], "srs.band[0]", "frequency")
+        hi = _positive(b[1], "srs.band[1]", "frequency")
+        _check(lo < hi, "srs.band", b, "needs f_min < f_max")
+        band = (lo, hi)
+    peak = _choice(t["peak"], "srs.peak", ("abs", "pos", "neg")) if "peak" in t else "abs"
+    kind = _choice(t["type"], "srs.type", ("acceleration", "pseudo-velocity")) if "type" in t else "acceleration"
+    return SRSSpec(q, per_octave, band, peak, kind)
+
+
 # --------------------------------------------------------------------------------------------------
 # The whole file
 # --------------------------------------------------------------------------------------------------
@@ -1159,7 +1201,8 @@ def _build(data: Mapping) -> StackSpec:
                f"a run of {n} masses would keep {need / 2**30:.1f} GiB of step history; at most "
                f"{MAX_RUN_MEMORY / 2**30:g} GiB (lower max_steps)")
     drop_spec = DropSpec(gravity, impact_velocity, height)
-    return StackSpec(drop_spec, bodies, contacts, ground, solver, materials, title)
+    srs = _parse_srs(top["srs"]) if "srs" in top else SRSSpec()
+    return StackSpec(drop_spec, bodies, contacts, ground, solver, materials, title, srs=srs)
 
 
 def _check_curved(contacts: ContactsSpec, bodies: BodiesSpec, ground, overrides, n) -> None:

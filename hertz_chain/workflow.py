@@ -45,7 +45,11 @@ def run_spec(spec: StackSpec) -> Report:
         sol = simulate(built.stack, built.state, ts=ts, **dict(options, t_max=sol.t_final))
     tol = {k: built.simulate_options["tolerances"].__getattribute__(k) for k in ("rtol", "atol")} \
         if built.simulate_options.get("tolerances") is not None else None
-    return analyse(sol, nominal_restitution=built.nominal_restitution, tolerances=tol)
+    from .srs import SRSOptions
+
+    o = spec.srs
+    options = SRSOptions(Q=o.q, per_octave=o.per_octave, band=o.band, peak=o.peak, kind=o.type)
+    return analyse(sol, nominal_restitution=built.nominal_restitution, tolerances=tol, srs_options=options)
 
 
 def simulate_file(path: str | Path) -> Report:

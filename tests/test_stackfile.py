@@ -683,3 +683,39 @@ def test_every_key_the_parser_accepts_is_in_the_manual():
                if not any(form in manual for form in (f"`{sec}.{key}`", f"`{key}`", f"[{key}]", f"[{sec}.{key}]",
                                                       f"[[{key}]]", f"[{key}.NAME]"))]
     assert not missing, missing
+
+
+# --------------------------------------------------------------------------------------------------
+# [srs] and one-mass files
+# --------------------------------------------------------------------------------------------------
+
+
+def test_srs_section():
+    spec = parse_stack(patched({"srs.damping": 0.05, "srs.per_octave": 3, "srs.band": ["100 Hz", "10 kHz"],
+                                "srs.peak": "neg", "srs.type": "pseudo-velocity"}))
+    assert spec.srs.q == pytest.approx(10.0, rel=1e-15)  # Q = 1/(2 zeta)
+    assert (spec.srs.per_octave, spec.srs.band, spec.srs.peak, spec.srs.type) == (3, (100.0, 1e4), "neg",
+                                                                                    "pseudo-velocity")
+    assert parse_stack(base()).srs.q == 10.0  # the default: Q = 10, maximax acceleration
+
+
+@pytest.mark.parametrize("changes, key, fragment", [
+    ({"srs.q": 0.3}, "srs.q", "0.5"),
+    ({"srs.q": 10, "srs.damping": 0.05}, "srs.damping", "conflicts"),
+    ({"srs.damping": 1.5}, "srs.damping", "(0, 1)"),
+    ({"srs.band": ["10 kHz", "100 Hz"]}, "srs.band", "f_min < f_max"),
+    ({"srs.band": ["1 m", "2 m"]}, "srs.band[0]", "frequency"),
+    ({"srs.band": "1 kHz"}, "srs.band", "pair"),
+    ({"srs.peak": "max"}, "srs.peak", "'abs'"),
+    ({"srs.type": "velocity"}, "srs.type", "pseudo-velocity"),
+    ({"srs.per_octave": 100}, "srs.per_octave", "48"),
+    ({"srs.window": 1}, "srs.window", "unknown"),
+])
+def test_srs_section_errors(changes, key, fragment):
+    assert_one_line_error(patched(changes), key, fragment)
+
+
+def test_one_mass_needs_no_gaps():
+    spec = parse_stack({"drop": {"impact_velocity": "1 m/s"}, "stack": {"masses": ["0.1 kg"]},
+                        "contact": {"law": "hertz", "stiffness": "1e9 N/m^1.5"}})
+    assert spec.n == 1 and spec.stack.gap_list(1) == ()
