@@ -21,8 +21,9 @@ record that starts and ends at rest is filtered without end transients.
 
 References: SAE J211-1, *Instrumentation for Impact Test — Part 1: Electronic Instrumentation*
 (Appendix C, the digital filter); ISO 6487, *Road vehicles — Measurement techniques in impact tests —
-Instrumentation*; the corridor of the frequency response is in docs/lab-workflow.md and is what the
-tests check the filter against.
+Instrumentation*. The tests check the filter against the Appendix C recursion written out and the
+closed-form response above; the standards' corridor (the tolerance lines of the response) was not
+available in a readable source and is not tested yet (docs/lab-workflow.md).
 """
 
 from __future__ import annotations
