@@ -390,7 +390,8 @@ def design_dict(cmp) -> dict:
             "mass_unit": "kg" if cmp.mvg.masses[0] != 1.0 else "m1",
             "mvg": _design_dict(cmp.mvg), "met": _design_dict(cmp.met),
             "mvg_over_met": {"velocity_gain": cmp.gain_ratio, "energy_efficiency": cmp.efficiency_ratio,
-                             "total_mass": cmp.mass_ratio}}
+                             "total_mass": cmp.mass_ratio},
+            "note": _end_mass_note(cmp)}
 
 
 def design_table(cmp) -> str:
@@ -413,7 +414,20 @@ def design_table(cmp) -> str:
              "  MET: " + ", ".join(f"{m:.5g}" for m in met.masses),
              "",
              "MVG/MET ratios are the quantities of the paper's Figs 13 (G), 14 (K) and 15/18 (M)."]
+    note = _end_mass_note(cmp)
+    if note:
+        lines.append("note: " + note)
     return "\n".join(lines)
+
+
+def _end_mass_note(cmp) -> str | None:
+    """A sentence when the two designs end at different top masses (the MET design's n is an integer,
+    so its top mass only approximates the one asked for): their ratios then compare unequal stacks."""
+    a, b = float(cmp.mvg.masses[-1]), float(cmp.met.masses[-1])
+    if abs(a - b) <= 1e-6 * max(abs(a), abs(b)):
+        return None
+    return (f"the designs end at different top masses (MVG {a:.5g}, MET {b:.5g}, {100 * (b / a - 1):+.2f} %): "
+            "the MVG/MET ratios compare stacks with unequal top masses")
 
 
 def optimize_table(result) -> str:

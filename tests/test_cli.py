@@ -157,3 +157,16 @@ def test_set_overrides_a_key_like_editing_the_file(tmp_path):
                         ("drop.impact_velocity.x=1", "is a value")):
         res = runner.invoke(app, ["simulate", str(NORMATIVE), "--set", bad])
         assert res.exit_code == 2 and needle in res.output and len(res.output.strip().splitlines()) == 1
+
+
+def test_design_says_when_the_top_masses_differ():
+    """The MET design's n is an integer, so its top mass only approximates the one asked for (here
+    0.099485 kg for 0.1 kg): the table and JSON say the ratios compare unequal stacks."""
+    res = runner.invoke(app, ["design", "--bottom-mass", "8.4", "--top-mass", "0.1", "--restitution", "0.8", "--json"])
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)
+    top_mvg, top_met = d["mvg"]["masses"][-1], d["met"]["masses"][-1]
+    assert top_mvg == pytest.approx(0.1, rel=1e-12) and abs(top_met / top_mvg - 1) > 1e-3
+    assert d["note"] and "unequal top masses" in d["note"]
+    res = runner.invoke(app, ["design", "--bottom-mass", "8.4", "--top-mass", "0.1", "--restitution", "0.8"])
+    assert "note: the designs end at different top masses" in res.stdout
