@@ -162,6 +162,32 @@ def test_event_driven_gain_survives_settling_under_gravity():
     assert c.event_driven_gain == pytest.approx(float(sol.launch_velocities[-1]) / v_ref, rel=0.01)
 
 
+M1, M2, K2, GAP2, V2 = 1.0, 0.2, 1e9, 1e-3, 1.0  # a gapped two-mass Hertz stack under gravity
+
+
+def two_mass_report(**kw):
+    stack = Stack(np.array([M1, M2]), [hc.contact.make_law("hertz", stiffness=K2)] * 2, gravity=G0)
+    return analyse(simulate(stack, at_impact(stack, V2, GAP2)), **kw)
+
+
+def two_mass_top_pulse(fs):
+    """The top accelerometer F_1/m_2 (m/s^2) of that stack by an independent scipy DOP853 solve
+    (rtol 1e-12), sampled at `fs` over its contact and 10 us either side."""
+    from scipy.integrate import solve_ivp
+
+    def rhs(t, y):  # x1, x2: displacements of the masses; overlaps -x1 (ground) and x1 - x2 (+ gap)
+        f0, f1 = K2 * max(-y[0], 0.0) ** 1.5, K2 * max(y[0] - y[1], 0.0) ** 1.5
+        return [y[2], y[3], (f0 - f1) / M1 - G0, f1 / M2 - G0]
+
+    sol = solve_ivp(rhs, (0, 4e-3), [0.0, GAP2, -V2, -V2], method="DOP853", rtol=1e-12, atol=1e-15,
+                    dense_output=True, max_step=2e-6)
+    t = np.linspace(0, 4e-3, 400_001)
+    y = sol.sol(t)
+    on = t[y[0] > y[1]]
+    yy = sol.sol(np.arange(on[0] - 1e-5, on[-1] + 1e-5, 1 / fs))
+    return K2 * np.maximum(yy[0] - yy[1], 0.0) ** 1.5 / M2
+
+
 def test_top_srs_is_the_top_contact_under_gravity_against_scipy_and_pyyeti():
     """The top SRS is the maximax SRS of the top mass's own contact pulse, over a band that covers at
     least 100 Hz-10 kHz. Reference: an independent scipy DOP853 solve (rtol 1e-12) of a gapped two-mass
@@ -169,26 +195,11 @@ def test_top_srs_is_the_top_contact_under_gravity_against_scipy_and_pyyeti():
     (Q = 10, maximax). The solver's steps are coarser than 50 points per cycle at the band's top, so
     this also checks the dense (Hermite) acceleration the SRS runs on. Measured 4e-6."""
     from pyyeti import srs as pyyeti_srs
-    from scipy.integrate import solve_ivp
 
-    m1, m2, k, gap, v0 = 1.0, 0.2, 1e9, 1e-3, 1.0
-    stack = Stack(np.array([m1, m2]), [hc.contact.make_law("hertz", stiffness=k)] * 2, gravity=G0)
-    srs = analyse(simulate(stack, at_impact(stack, v0, gap))).top_srs
+    srs = two_mass_report().top_srs
     assert srs.frequencies_Hz[0] <= 100.0 and srs.frequencies_Hz[-1] >= 1e4
-
-    def rhs(t, y):  # x1, x2: displacements of the masses; overlaps -x1 (ground) and x1 - x2 (+ gap)
-        f0, f1 = k * max(-y[0], 0.0) ** 1.5, k * max(y[0] - y[1], 0.0) ** 1.5
-        return [y[2], y[3], (f0 - f1) / m1 - G0, f1 / m2 - G0]
-
-    sol = solve_ivp(rhs, (0, 4e-3), [0.0, gap, -v0, -v0], method="DOP853", rtol=1e-12, atol=1e-15,
-                    dense_output=True, max_step=2e-6)
-    t = np.linspace(0, 4e-3, 400_001)
-    y = sol.sol(t)
-    on = t[y[0] > y[1]]
     fs = 20e6
-    tt = np.arange(on[0] - 1e-5, on[-1] + 1e-5, 1 / fs)
-    yy = sol.sol(tt)
-    a_g = k * np.maximum(yy[0] - yy[1], 0.0) ** 1.5 / m2 / G0
+    a_g = two_mass_top_pulse(fs) / G0
     ref = pyyeti_srs.srs(a_g, fs, srs.frequencies_Hz, 10.0, ic="zero", stype="absacce", peak="abs", time="total")
     np.testing.assert_allclose(srs.maximax, ref, rtol=1e-4)
 
@@ -199,31 +210,16 @@ def test_top_srs_options_pseudo_velocity_against_scipy_and_pyyeti():
     2 MHz, through pyyeti (stype='pvelo', peak='pos'). (At 20 MHz pyyeti's closed-form pseudo-velocity
     coefficients lose ~1e-5 to cancellation: checked against an ODE solve of the oscillator.)"""
     from pyyeti import srs as pyyeti_srs
-    from scipy.integrate import solve_ivp
 
     from hertz_chain.srs import SRSOptions, octave_frequencies
 
-    m1, m2, k, gap, v0 = 1.0, 0.2, 1e9, 1e-3, 1.0
-    stack = Stack(np.array([m1, m2]), [hc.contact.make_law("hertz", stiffness=k)] * 2, gravity=G0)
     opts = SRSOptions(Q=25.0, per_octave=6, band=(200.0, 2e4), peak="pos", kind="pseudo-velocity")
-    srs = analyse(simulate(stack, at_impact(stack, v0, gap)), srs_options=opts).top_srs
+    srs = two_mass_report(srs_options=opts).top_srs
     step = 2 ** (1 / 6) * (1 + 1e-12)
     np.testing.assert_array_equal(srs.frequencies_Hz, octave_frequencies(200 / step, 2e4 * step, 6))
-
-    def rhs(t, y):
-        f0, f1 = k * max(-y[0], 0.0) ** 1.5, k * max(y[0] - y[1], 0.0) ** 1.5
-        return [y[2], y[3], (f0 - f1) / m1 - G0, f1 / m2 - G0]
-
-    sol = solve_ivp(rhs, (0, 4e-3), [0.0, gap, -v0, -v0], method="DOP853", rtol=1e-12, atol=1e-15,
-                    dense_output=True, max_step=2e-6)
-    t = np.linspace(0, 4e-3, 400_001)
-    y = sol.sol(t)
-    on = t[y[0] > y[1]]
     fs = 2e6
-    tt = np.arange(on[0] - 1e-5, on[-1] + 1e-5, 1 / fs)
-    yy = sol.sol(tt)
-    a = k * np.maximum(yy[0] - yy[1], 0.0) ** 1.5 / m2  # m/s^2
-    ref = pyyeti_srs.srs(a, fs, srs.frequencies_Hz, 25.0, ic="zero", stype="pvelo", peak="pos", time="total")
+    ref = pyyeti_srs.srs(two_mass_top_pulse(fs), fs, srs.frequencies_Hz, 25.0, ic="zero", stype="pvelo", peak="pos",
+                         time="total")
     # peaks are picked on the report's grid, 50 points per cycle at the band's top: low by up to
     # 1 - cos(pi/50) = 2e-3 there (measured 1.6e-3 at 20 kHz, 2e-7 at 200 Hz)
     r = srs.maximax / np.abs(ref) - 1
