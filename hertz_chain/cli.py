@@ -307,7 +307,7 @@ EXIT_CHECK_FAILED = 1  # `check`: a judged criterion failed
 
 @app.command()
 def check(
-    stack_file: Optional[Path] = typer.Argument(None, help="Stack file; its [test] section or --standard says what to check."),
+    stack_file: Optional[Path] = typer.Argument(None, help="Stack file; its \\[test] section or --standard says what to check."),
     standard: Optional[str] = typer.Option(None, "--standard", help="A test condition (e.g. \"JESD22-B110 B\"); 'list' prints the table."),
     as_json: bool = typer.Option(False, "--json", help="Print the result as JSON."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Draw the pulse inside its band (PNG)."),
@@ -319,7 +319,15 @@ def check(
     from .standards import read_test_file, standards_table
 
     if standard is not None and standard.strip().lower() == "list":
-        typer.echo(standards_table())
+        if as_json:
+            import dataclasses
+
+            from . import report
+            from .standards import conditions
+
+            typer.echo(report.to_json([dict(dataclasses.asdict(c), name=c.name) for c in conditions()]))
+        else:
+            typer.echo(standards_table())
         return
     try:
         if stack_file is None:
@@ -354,7 +362,10 @@ def check(
     if not status.ok:
         typer.echo(f"hertz-chain: {status.text}: the run did not complete; the check is of a partial pulse", err=True)
         raise typer.Exit(code=status.exit_code)
-    if not result.passed:
+    if result.passed is None:
+        typer.echo("hertz-chain: note: nothing was judged (no tolerance or band given): the values are reported "
+                   "only", err=True)
+    elif not result.passed:
         raise typer.Exit(code=EXIT_CHECK_FAILED)
 
 

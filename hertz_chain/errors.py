@@ -24,8 +24,20 @@ class ParameterError(HertzChainError, ValueError):
     """A parameter is out of its allowed range or of the wrong kind."""
 
     def __init__(self, name: str, value: object, allowed: str):
+        value = _plain(value)
         self.name, self.value, self.allowed = name, value, allowed
         super().__init__(f"{name} = {value!r} is invalid: {allowed}")
+
+
+def _plain(value: object) -> object:
+    """A NumPy/JAX scalar as the Python number it holds (so that messages read `0.5`, not
+    `np.float64(0.5)`); anything else unchanged."""
+    if getattr(value, "shape", None) == () and hasattr(value, "item"):
+        try:
+            return value.item()
+        except Exception:  # a traced value: leave it
+            return value
+    return value
 
 
 class StackFileError(HertzChainError, ValueError):

@@ -69,6 +69,7 @@ class MeasuredPulse:
     source: str = ""
     time_unit: str = "s"
     accel_unit: str = "m/s^2"
+    notes: tuple[str, ...] = ()
 
     @property
     def sample_rate(self) -> float:
@@ -141,12 +142,23 @@ def read_pulse_csv(path, *, time_unit: str | None = None, accel_unit: str | None
     units = {}
     for col, given, table, what in ((time_column, time_unit, TIME_UNITS, "time"),
                                     (accel_column, accel_unit, ACCEL_UNITS, "acceleration")):
-        unit = given if given is not None else (_unit_of(header[col]) if header is not None else None)
+        in_header = _unit_of(header[col]) if header is not None else None
+        unit = given if given is not None else in_header
+        option = "--time-unit" if what == "time" else "--accel-unit"
+        if given is not None and in_header is not None:
+            try:
+                differs = _factor(in_header, table, what, "header") != _factor(given, table, what, option)
+            except ParameterError:
+                differs = False  # an unreadable header unit: the option decides (checked below)
+            if differs:
+                raise ParameterError(f"{path}: {what} unit", given,
+                                     f"the unit of column {header[col]!r} ({in_header}), or no {option} "
+                                     "(the header already says it)")
         if unit is None:
             where = f"header {header[col]!r}" if header is not None else "no header"
             raise ParameterError(f"{path}: {what} unit", where,
                                  f"a unit in the header, e.g. 'time (ms), acceleration (g)', or the "
-                                 f"{'--time-unit' if what == 'time' else '--accel-unit'} option "
+                                 f"{option} option "
                                  f"({', '.join(sorted(set(table)))})")
         units[what] = (unit, _factor(unit, table, what, f"{path}: {what} unit"))
     try:
@@ -155,15 +167,25 @@ def read_pulse_csv(path, *, time_unit: str | None = None, accel_unit: str | None
         bad = next(i for i, r in enumerate(rows) if not _row_ok(r, time_column, accel_column))
         raise ParameterError(f"{path}: data row {bad + 1}", ",".join(rows[bad]),
                              f"numbers in columns {time_column + 1} and {accel_column + 1}") from None
-    if data.shape[0] < 3 or not np.all(np.isfinite(data)):
+    if data.shape[0] < 3:
         raise ParameterError(str(path), f"{data.shape[0]} rows", "at least 3 rows of finite numbers")
+    if not np.all(np.isfinite(data)):
+        i = int(np.argmin(np.all(np.isfinite(data), axis=1)))
+        raise ParameterError(f"{path}: data row {i + 1}", ",".join(rows[i]), "finite numbers (no NaN or inf)")
     t = data[:, 0] * units["time"][1]
     if not np.all(np.diff(t) > 0):
         i = int(np.argmin(np.diff(t) > 0))
-        raise ParameterError(f"{path}: time", f"row {i + 2}: {data[i + 1, 0]!r} after {data[i, 0]!r}",
+        raise ParameterError(f"{path}: time", f"row {i + 2}: {float(data[i + 1, 0])!r} after {float(data[i, 0])!r}",
                              "strictly increasing times")
+    notes = ()
+    ncol = len(header) if header is not None else max(len(r) for r in rows)
+    if ncol > 2:
+        names = (f" ({header[time_column].strip()!r}, {header[accel_column].strip()!r})" if header is not None
+                 else "")
+        notes = (f"{Path(path).name} has {ncol} columns: columns {time_column + 1} and {accel_column + 1}{names} "
+                 "were read as time and acceleration",)
     return MeasuredPulse(t, data[:, 1] * units["acceleration"][1], str(path), units["time"][0],
-                         units["acceleration"][0])
+                         units["acceleration"][0], notes)
 
 
 def _row_ok(r, i, j) -> bool:
@@ -282,7 +304,8 @@ class Comparison:
             "model": cm,
             "relative_difference": {k: (cm[k] - mm[k]) / mm[k] if mm[k] else None for k in mm},
             "sprague_geers": {"magnitude": M, "phase": P, "comprehensive": C},
-            "srs": {"frequencies_Hz": self.srs_frequencies_Hz.tolist(), "measured_g": self.measured_srs.tolist(),
+            "srs": {"type": "acceleration", "peak": "maximax", "q": 10.0,
+                    "frequencies_Hz": self.srs_frequencies_Hz.tolist(), "measured_g": self.measured_srs.tolist(),
                     "model_g": self.model_srs.tolist(),
                     "max_abs_difference_dB": float(np.max(np.abs(20 * np.log10(self.model_srs / self.measured_srs))))},
             "notes": list(self.notes),
@@ -296,8 +319,7 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
 
     - `report`: a `hertz_chain.Report` (e.g. `hc.simulate_file(path)`) whose run holds the top
       mass's pulse.
-    - `measured`: a :class:`MeasuredPulse` (:func:`read_pulse_csv`); it must be uniformly sampled when
-      `cfc` is given.
+    - `measured`: a :class:`MeasuredPulse` (:func:`read_pulse_csv`).
     - `cfc`: filter both the measurement and the model by this channel frequency class (60, 180, 600,
       1000; `hertz_chain.filters.cfc_filter`), as a lab's data channel would; None: no filter.
     - `align`: `"xcorr"` (default), `"onset"` or `"none"` (`align_shift`).
@@ -310,8 +332,12 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
 
     **Returns:** a :class:`Comparison`.
 
-    **Raises:** `ParameterError` for a report without a top pulse, a bad `cfc`/`align`, or a
-    non-uniform record with `cfc`.
+    A non-uniform record is resampled linearly at its mean rate first (a note says so, and names any gap
+    longer than 5 mean steps); a negative-going record is compared with its sign flipped (a note says
+    so); a note names a pulse that the record's window cuts.
+
+    **Raises:** `ParameterError` for a report without a top pulse, a bad `cfc`/`align`, or a record
+    sampled more coarsely than half the model's pulse (usually a wrong time unit).
     """
     from .analysis import accelerometer
     from .filters import cfc_filter
@@ -323,19 +349,33 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
         raise ParameterError("report", "no top pulse", "a run in which the top mass was struck")
     t = np.asarray(measured.t, dtype=float)
     h = (t[-1] - t[0]) / (t.size - 1)
-    notes = []
-    uniform = np.max(np.abs(np.diff(t) - h)) <= 1e-6 * h
+    notes = list(measured.notes)
+    dt = np.diff(t)
+    uniform = np.max(np.abs(dt - h)) <= 1e-6 * h
     if not uniform:
-        if cfc is not None:
-            raise ParameterError("measured", "non-uniform sample times", "a uniformly sampled record for cfc")
         t_u = t[0] + h * np.arange(t.size)
         m_u = np.interp(t_u, t, measured.a)
-        notes.append(f"the measurement's times are not uniform: resampled linearly at {1 / h:.6g} Hz")
+        notes.append(f"the measurement's times are not uniform: resampled linearly at its mean rate {1 / h:.6g} Hz"
+                     + (" before the CFC filter" if cfc is not None else ""))
+        if dt.max() > 5 * h:
+            i = int(np.argmax(dt))
+            notes.append(f"the measurement has a gap of {dt[i] * 1e3:.4g} ms ({dt[i] / h:.3g} mean steps) after "
+                         f"t = {t[i] * 1e3:.6g} ms: the resampled record is a straight line across it")
         t = t_u
     else:
         m_u = np.asarray(measured.a, dtype=float)
     sol_t = np.asarray(report.solution.steps.t, dtype=float)
     top = report.top_pulse
+    polarity = pulse_metrics(t, m_u).sign
+    if polarity < 0:
+        m_u = -m_u
+        notes.append("the measured pulse is negative-going (its largest excursion is below zero): it is compared "
+                     "with its sign flipped, as the model's top pulse is positive (upward acceleration)")
+    h_model = top.duration_10
+    if h_model < 2 * h:
+        raise ParameterError(f"{measured.source or 'measured'}: sample interval", f"{h * 1e3:.6g} ms",
+                             f"shorter than half the model's pulse ({h_model * 1e3:.4g} ms between its 10 % points): "
+                             "check the time unit (header or --time-unit)")
 
     def model_on(times):
         inside = (times >= sol_t[0]) & (times <= sol_t[-1])
@@ -353,6 +393,14 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
     if cfc is not None:
         meas, model = cfc_filter(t, meas, cfc), cfc_filter(t, model, cfc)
     meas_pm, model_pm = pulse_metrics(t, meas), pulse_metrics(t, model)
+    ratio = meas_pm.duration_10 / top.duration_10
+    if not 0.1 <= ratio <= 10:
+        notes.append(f"the measured pulse lasts {ratio:.3g} times the model's ({meas_pm.duration_10 * 1e3:.4g} ms "
+                     f"against {top.duration_10 * 1e3:.4g} ms between 10 % points): check the time unit")
+    for who, pm in (("measured", meas_pm), ("model's", model_pm)):
+        if pm.truncated:
+            notes.append(f"the record's window cuts the {who} pulse: its duration and velocity change are measured "
+                         "to the window's edge")
     M, P, C = sprague_geers(meas, model, t)
     D = meas_pm.duration_10
     step = 2.0 ** (1 / 12) * (1 + 1e-12)

@@ -199,7 +199,7 @@ def _pyplot():
 def plot_check(result, path: str | Path) -> None:
     """The checked pulse inside its nominal pulse and band (`hertz_chain.standards.CheckResult`), in g
     against ms from the nominal pulse's start, with the verdict of every criterion in the legend."""
-    from .standards import nominal_pulse
+    from .standards import band_limits, nominal_pulse
 
     plt = _pyplot()
     spec = result.spec
@@ -210,8 +210,8 @@ def plot_check(result, path: str | Path) -> None:
     nom = nominal_pulse(spec.shape, spec.peak_g, spec.duration, result.t - result.nominal_start)
     fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
     if spec.band is not None:
-        ax.fill_between(t, nom - spec.band * spec.peak_g, nom + spec.band * spec.peak_g, color="0.85",
-                        label=f"band ±{spec.band:g} A")
+        lo, hi = band_limits(spec, result.t - result.nominal_start)
+        ax.fill_between(t, lo, hi, color="0.85", label=f"band ±{spec.band:g} A")
     ax.plot(t, nom, "k--", lw=1, label=f"nominal {spec.shape}, {spec.peak_g:g} g, {spec.duration * 1e3:g} ms")
     ax.plot(t, a_g, color="C3", lw=1.6, label="top pulse (model)")
     for c in result.criteria:
@@ -219,7 +219,7 @@ def plot_check(result, path: str | Path) -> None:
             ax.plot([], [], " ", label=f"{c.name}: {'pass' if c.passed else 'FAIL'} ({c.margin:+.3g} {c.unit})")
     ax.grid(True, alpha=0.4)
     ax.set(xlabel="time from the nominal pulse's start (ms)", ylabel="acceleration (g)",
-           title=f"{spec.name}: {'PASS' if result.passed else 'FAIL'}")
+           title=f"{spec.name}: {result.verdict}")
     ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.savefig(path, dpi=120, format="png")
     plt.close(fig)

@@ -123,8 +123,8 @@ def to_dict(report: Report) -> dict:
 
 
 def to_json(obj) -> str:
-    """JSON text of a `Report` (or of any JSON-ready dict)."""
-    data = obj if isinstance(obj, dict) else to_dict(obj)
+    """JSON text of a `Report` (or of any JSON-ready dict or list)."""
+    data = obj if isinstance(obj, (dict, list)) else to_dict(obj)
     return json.dumps(data, indent=2)
 
 
@@ -277,8 +277,10 @@ def to_dataset(report: Report, meta: dict | None = None):
         "position": (("time", "mass"), st.positions, {"units": "m", "long_name": "position of the mass (upward)"}),
         "velocity": (("time", "mass"), st.velocities, {"units": "m s-1", "long_name": "velocity of the mass (upward)"}),
         "acceleration": (("time", "mass"), st.accelerations,
-                         {"units": "m s-2", "long_name": "acceleration of the mass (upward, gravity included)"}),
-        "acceleration_g": (("time", "mass"), a_g,
+                         {"units": "m s-2", "long_name": "kinematic acceleration d2x/dt2 of the mass (upward; -g in free fall)"}),
+        "accelerometer": (("time", "mass"), st.accelerations + g,
+                          {"units": "m s-2", "long_name": "accelerometer reading a + g (upward; 0 in free fall)"}),
+        "accelerometer_g": (("time", "mass"), a_g,
                            {"units": "1", "long_name": f"accelerometer reading (a + g) {_ACC_G}"}),
         "overlap": (("time", "interface"), st.overlaps,
                     {"units": "m", "long_name": "overlap of the interface (> 0 compression)"}),
@@ -370,7 +372,7 @@ def write_output(report: Report, path: str | Path, meta: dict | None = None) -> 
                 "columns: time (s); accelerometer a + g (m/s^2); the same in g (9.80665 m/s^2); velocity (m/s, upward)"]
         with open(path, "w", encoding="utf-8") as f:
             f.writelines(f"# {line}\n" for line in head)
-            f.write("time_s,acceleration_mps2,acceleration_g,velocity_mps\n")
+            f.write("time_s,accelerometer_mps2,accelerometer_g,velocity_mps\n")
             np.savetxt(f, table, delimiter=",")
 
 
@@ -470,13 +472,13 @@ def compare_table(c) -> str:
             ("velocity change", "m/s", "delta_v_mps")]
     out = [f"measured: {c.source}" + (f" (CFC {c.cfc})" if c.cfc else " (unfiltered)")
            + f"; model shifted {c.shift * 1e3:+.5g} ms ({c.alignment})",
-           f"{'':<18} {'measured':>12} {'model':>12} {'difference':>11}"]
+           f"{'':<18} {'measured':>12} {'model':>12} {'model/meas - 1':>15}"]
     for label, unit, key in rows:
         m, x, r = d["measured"][key], d["model"][key], d["relative_difference"][key]
-        out.append(f"{label + ' (' + unit + ')':<18} {m:>12.5g} {x:>12.5g} {'' if r is None else f'{100 * r:+.2f} %':>11}")
+        out.append(f"{label + ' (' + unit + ')':<18} {m:>12.5g} {x:>12.5g} {'' if r is None else f'{100 * r:+.2f} %':>15}")
     sg = d["sprague_geers"]
     out.append(f"Sprague-Geers: magnitude {sg['magnitude']:+.4f}, phase {sg['phase']:.4f}, comprehensive "
                f"{sg['comprehensive']:.4f}")
-    out.append(f"SRS (Q = 10, {c.srs_frequencies_Hz[0]:.4g}-{c.srs_frequencies_Hz[-1]:.4g} Hz): largest difference "
+    out.append(f"SRS (maximax acceleration, Q = 10, {c.srs_frequencies_Hz[0]:.4g}-{c.srs_frequencies_Hz[-1]:.4g} Hz): largest difference "
                f"{d['srs']['max_abs_difference_dB']:.2f} dB")
     return "\n".join(out)

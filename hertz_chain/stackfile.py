@@ -126,6 +126,11 @@ SHAPES = ("sphere", "flat")
 _TOP_KEYS = ("title", "drop", "stack", "ground", "contact", "materials", "solver", "optimize", "sweep", "test",
              "srs")
 _SRS_KEYS = ("q", "damping", "per_octave", "band", "peak", "type")
+#: Where an SRS band may lie (Hz), and its largest f_max/f_min: the filters run at 50 samples per cycle of
+#: f_max and pad the record by a cycle of f_min, so the work grows as f_max/f_min (5 decades: 5e6
+#: samples per frequency), and the pseudo-velocity's discretisation is checked to fs/f = 1e5 (docs).
+SRS_BAND_LIMITS = (0.01, 1e7)
+SRS_MAX_SPAN = 1e5
 # `optimize`, `sweep` and `test` are read by `hertz_chain.optimize`, `hertz_chain.sweep` and
 # `hertz_chain.standards` (docs/optimize.md, docs/lab-workflow.md,
 # docs/sweeps.md); simulating such a file runs its base stack
@@ -1082,6 +1087,9 @@ def _parse_srs(raw: Any) -> SRSSpec:
         lo = _positive(b[0], "srs.band[0]", "frequency")
         hi = _positive(b[1], "srs.band[1]", "frequency")
         _check(lo < hi, "srs.band", b, "needs f_min < f_max")
+        _check(SRS_BAND_LIMITS[0] <= lo and hi <= SRS_BAND_LIMITS[1] and hi / lo <= SRS_MAX_SPAN, "srs.band", b,
+               f"must lie within [{SRS_BAND_LIMITS[0]:g} Hz, {SRS_BAND_LIMITS[1]:g} Hz] and span at most "
+               f"{math.log10(SRS_MAX_SPAN):g} decades (f_max/f_min <= {SRS_MAX_SPAN:g})")
         band = (lo, hi)
     peak = _choice(t["peak"], "srs.peak", ("abs", "pos", "neg")) if "peak" in t else "abs"
     kind = _choice(t["type"], "srs.type", ("acceleration", "pseudo-velocity")) if "type" in t else "acceleration"
@@ -1276,8 +1284,10 @@ def apply_overrides(data: Mapping, overrides) -> dict:
     """A copy of the parsed stack file `data` with `KEY=VALUE` overrides set (the command line's
     `--set`): `KEY` a dotted path into the file's tables (`drop.height`, `contact.restitution`,
     `solver.rtol`), `VALUE` a TOML value (`0.7`, `"30 cm"`, `[1, 0.5]`, `true`) or, when it is not one,
-    the text itself (`30 cm`). Sections and keys are created as needed; the stack-file checks then
-    judge the result as they would the file.
+    the text itself (`30 cm`). Sections and keys are created as needed; a key that says the same as
+    another of the file (`srs.q` / `srs.damping`, `drop.height` / `drop.impact_velocity`,
+    `solver.dt_output` / `solver.n_output`) replaces it, unless both are set; the stack-file checks
+    then judge the result as they would the file.
 
     **Raises:** `StackFileError` (`--set ...`) for a malformed override or a key that crosses a value.
     """
@@ -1285,6 +1295,7 @@ def apply_overrides(data: Mapping, overrides) -> dict:
     import tomllib
 
     out = copy.deepcopy(dict(data))
+    set_keys: set[str] = set()
     for item in overrides or ():
         key, sep, raw = str(item).partition("=")
         key = key.strip()
@@ -1302,7 +1313,21 @@ def apply_overrides(data: Mapping, overrides) -> dict:
                 raise _error(None, f"--set {key}: {'.'.join(parts[: i + 1])} is a value, not a section")
             node = nxt
         node[parts[-1]] = value
+        for other in _ALTERNATIVES.get(key, ()):  # --set srs.q replaces the file's srs.damping, ...
+            sec, _, name = other.rpartition(".")
+            table = out.get(sec) if sec else out
+            if isinstance(table, dict) and name in table and other not in set_keys:
+                del table[name]
+        set_keys.add(key)
     return out
+
+
+#: Keys that say the same thing another way: a `--set` of one replaces the file's other.
+_ALTERNATIVES = {
+    "srs.q": ("srs.damping",), "srs.damping": ("srs.q",),
+    "solver.dt_output": ("solver.n_output",), "solver.n_output": ("solver.dt_output",),
+    "drop.height": ("drop.impact_velocity",), "drop.impact_velocity": ("drop.height",),
+}
 
 
 def load_stack_file(path: str | Path, overrides=None) -> StackSpec:

@@ -63,6 +63,11 @@ __all__ = [
 STANDARDS_CSV = Path(__file__).resolve().parent / "data" / "shock_standards.csv"
 
 #: Nominal pulse shapes: name -> (ΔV / (A·D), 10 % width / D).
+#: Default fall allowance of a terminal-peak sawtooth's band, as a fraction of its duration D: the
+#: nominal pulse drops vertically at D, a real one cannot; the band's upper limit falls from the peak to
+#: zero over `fall_time` (hertz_chain's choice, stated in every check that uses it; `test.fall_time`).
+DEFAULT_FALL = 0.1
+
 SHAPES = {
     "half-sine": (2.0 / math.pi, 1.0 - 2.0 * math.asin(0.1) / math.pi),
     "sawtooth": (0.5, 0.9),
@@ -178,6 +183,21 @@ def nominal_pulse(shape: str, peak: float, duration: float, t) -> np.ndarray:
     return np.where(inside, peak * y, 0.0)
 
 
+def band_limits(spec: TestSpec, t) -> tuple[np.ndarray, np.ndarray]:
+    """The band's lower and upper limits (units of `spec.peak_g`, g) at `t` (s from the nominal pulse's
+    start): the nominal pulse ± `band`·A, where a terminal-peak sawtooth's upper limit falls linearly
+    from its peak to zero over `spec.fall_time` after `D` (the fall allowance) while its lower limit
+    drops at `D`."""
+    t = np.asarray(t, dtype=float)
+    nom = nominal_pulse(spec.shape, spec.peak_g, spec.duration, t)
+    upper = nom
+    if spec.shape == "sawtooth" and spec.fall_time:
+        s = (t - spec.duration) / spec.fall_time
+        upper = np.maximum(nom, np.where((s >= 0) & (s <= 1), spec.peak_g * (1.0 - np.clip(s, 0, 1)), 0.0))
+    b = spec.band * spec.peak_g
+    return nom - b, upper + b
+
+
 def nominal_delta_v(shape: str, peak: float, duration: float) -> float:
     """Velocity change of the nominal pulse (`peak` in m/s², `duration` in s)."""
     return SHAPES[_check_shape(shape)][0] * peak * duration
@@ -205,12 +225,30 @@ class TestSpec:
     velocity_tolerance: tuple[float, float] | None = None
     band: float | None = None
     source: str = ""
+    fall_time: float | None = None
+
+    def __post_init__(self):
+        if self.fall_time is None and self.shape == "sawtooth":
+            object.__setattr__(self, "fall_time", DEFAULT_FALL * self.duration)
 
     @classmethod
     def from_condition(cls, c: ShockCondition, **overrides) -> TestSpec:
+        """The row's nominal pulse and tolerances, with `overrides` (any field). When the overrides change
+        the nominal pulse itself (shape, peak_g or duration), the name says so: `"MIL-STD-883 2002 B,
+        modified: peak_g 1000"`."""
         spec = cls(c.name, c.shape, c.peak_g, c.duration, c.peak_tolerance, c.duration_tolerance,
                    c.velocity_tolerance, None, f"{c.document}, {c.clause} ({c.source_level}: {c.source})")
-        return dataclasses.replace(spec, **{k: v for k, v in overrides.items() if v is not None})
+        over = {k: v for k, v in overrides.items() if v is not None}
+        changed = [f"{k} {over[k] * 1e3:g} ms" if k == "duration" else f"{k} {over[k]:g}" if k == "peak_g"
+                   else f"{k} {over[k]}" for k in ("shape", "peak_g", "duration")
+                   if k in over and over[k] != getattr(spec, k)]
+        if changed:
+            over["name"] = f"{c.name}, modified: {', '.join(changed)}"
+        if "shape" in over and over["shape"] != "sawtooth" and "fall_time" not in over:
+            over["fall_time"] = None
+        elif "duration" in over and spec.shape == "sawtooth" and "fall_time" not in over:
+            over["fall_time"] = DEFAULT_FALL * over["duration"]
+        return dataclasses.replace(spec, **over)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -243,15 +281,21 @@ class CheckResult:
     a: np.ndarray | None = dataclasses.field(default=None, repr=False)  # and its samples (m/s²)
 
     @property
-    def passed(self) -> bool:
-        """True when every judged criterion passed (and at least one was judged)."""
+    def passed(self) -> bool | None:
+        """True when every judged criterion passed, False when one failed, None when nothing was judged
+        (no tolerance and no band given)."""
         judged = [c.passed for c in self.criteria if c.passed is not None]
-        return bool(judged) and all(judged)
+        return all(judged) if judged else None
+
+    @property
+    def verdict(self) -> str:
+        """`"PASS"`, `"FAIL"` or `"NOT JUDGED"`."""
+        return {True: "PASS", False: "FAIL", None: "NOT JUDGED"}[self.passed]
 
     def to_dict(self) -> dict:
         return {"condition": self.spec.name, "shape": self.spec.shape, "nominal_peak_g": self.spec.peak_g,
                 "nominal_duration_ms": self.spec.duration * 1e3, "source": self.spec.source,
-                "passed": self.passed, "nominal_start_s": self.nominal_start,
+                "passed": self.passed, "verdict": self.verdict.lower(), "nominal_start_s": self.nominal_start,
                 "criteria": [c.to_dict() for c in self.criteria], "notes": list(self.notes)}
 
     def table(self) -> str:
@@ -261,8 +305,13 @@ class CheckResult:
             rng = "not judged (no tolerance)" if c.passed is None else f"allowed [{c.low:.5g}, {c.high:.5g}]"
             verdict = "" if c.passed is None else ("PASS" if c.passed else "FAIL")
             margin = "" if c.margin is None else f" margin {c.margin:+.4g} {c.unit}"
-            out.append(f"  {c.name:<16} {c.value:.5g} {c.unit} (nominal {c.nominal:.5g}) {rng}{margin} {verdict}")
-        out.append(f"result: {'PASS' if self.passed else 'FAIL'}")
+            nominal = "" if c.name == "band" else f" (nominal {c.nominal:.5g})"
+            what = "largest excursion" if c.name == "band" else ""
+            out.append(f"  {c.name:<16} {what + ' ' if what else ''}{c.value:.5g} {c.unit}{nominal} {rng}{margin} "
+                       f"{verdict}".rstrip())
+        out.append(f"result: {self.verdict}" + (" (no tolerance given: add test.peak_tolerance, "
+                                                 "duration_tolerance, velocity_tolerance or band)"
+                                                 if self.passed is None else ""))
         out.extend(f"note: {n}" for n in self.notes)
         return "\n".join(out)
 
@@ -276,15 +325,16 @@ def _judge(name, unit, value, nominal, tol) -> Criterion:
 
 
 def band_margin(t, a_g, spec: TestSpec, start: float, lobe: tuple[float, float]) -> float:
-    """Smallest `band·A − |a − nominal|` (g) over the nominal pulse's support `[start, start + D]` joined
-    with the pulse's main lobe `lobe`, for the nominal pulse starting at `start` (the pulse `a_g` in g,
-    linear between samples, sampled at `t`)."""
-    t0, t1 = min(start, lobe[0]), max(start + spec.duration, lobe[1])
+    """Smallest distance (g) of the pulse inside its band (:func:`band_limits`), negative where it leaves
+    it, over the nominal pulse's support `[start, start + D (+ fall_time)]` joined with the pulse's main
+    lobe `lobe`, for the nominal pulse starting at `start` (the pulse `a_g` in g, linear between
+    samples, sampled at `t`)."""
+    t0, t1 = min(start, lobe[0]), max(start + spec.duration + (spec.fall_time or 0.0), lobe[1])
     inside = (t >= t0) & (t <= t1)
     tt = np.concatenate([[t0], t[inside], [t1]])
     aa = np.interp(tt, t, a_g)
-    nom = nominal_pulse(spec.shape, spec.peak_g, spec.duration, tt - start)
-    return float(np.min(spec.band * spec.peak_g - np.abs(aa - nom)))
+    lo, hi = band_limits(spec, tt - start)
+    return float(np.min(np.minimum(hi - aa, aa - lo)))
 
 
 def check_pulse(t, a, spec: TestSpec) -> CheckResult:
@@ -326,6 +376,10 @@ def check_pulse(t, a, spec: TestSpec) -> CheckResult:
         m = band_margin(t, a_g, spec, start, lobe)
         crit.append(Criterion("band", "g", float(spec.band * spec.peak_g - m), 0.0, 0.0,
                               float(spec.band * spec.peak_g), float(m), bool(m >= 0)))
+        if spec.shape == "sawtooth" and spec.fall_time:
+            notes.append(f"the band lets the sawtooth fall from its peak to zero within {spec.fall_time * 1e3:.4g} ms "
+                         f"after D (test.fall_time; default {DEFAULT_FALL:g} D, hertz_chain's allowance, not a "
+                         "number of the standard)")
     if pm.truncated:
         notes.append("the record cuts the pulse: its duration and velocity change are measured to the record's end")
     return CheckResult(spec, tuple(crit), float(start), tuple(notes), t, a)
@@ -334,7 +388,7 @@ def check_pulse(t, a, spec: TestSpec) -> CheckResult:
 # ------------------------------------------------------------------------------------------ files
 #: Keys of a stack file's `[test]` section.
 TEST_KEYS = ("standard", "shape", "peak_g", "duration", "peak_tolerance", "duration_tolerance",
-             "velocity_tolerance", "band")
+             "velocity_tolerance", "band", "fall_time")
 
 
 def _tolerance(raw, key: str) -> tuple[float, float]:
@@ -391,6 +445,12 @@ def parse_test(raw, standard: str | None = None) -> TestSpec:
             raise StackFileError(f"test.band: {b!r} is invalid: the band's half-width as a fraction of the peak, "
                                  "in (0, 1), e.g. 0.2")
         over["band"] = float(b)
+    if "fall_time" in raw:
+        f = parse_quantity(raw["fall_time"], "time", "test.fall_time")
+        if not f > 0:
+            raise StackFileError(f"test.fall_time: {raw['fall_time']!r} is invalid: a duration > 0, e.g. \"0.1 ms\" "
+                                 "(the terminal-peak sawtooth's fall allowance in the band)")
+        over["fall_time"] = f
     if name is not None:
         if not isinstance(name, str):
             raise StackFileError(f"test.standard: {name!r} is invalid: a condition name, e.g. \"JESD22-B110 B\"")

@@ -87,7 +87,7 @@ print(f"Hertz contact time at 1 m/s: {TC_HERTZ * 1e3:.4f} ms; k_lin = {K_LIN:.4e
 # the Ramírez et al. 1999 series and the Müller & Pöschel 2011 Padé fit of docs/references.md, "Damped Hertz laws").
 
 # %%
-vs = np.geomspace(0.1, 10.0, 5 if QUICK else 13)
+vs = np.geomspace(0.1, 10.0, 3 if QUICK else 13)
 e_sim = {name: np.array([hc.restitution(law, v, M, tolerances=TOL).e for v in vs]) for name, law in laws.items()}
 hc_alpha = float(laws["hunt-crossley"].alpha)
 visco = laws["viscoelastic"]

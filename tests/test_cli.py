@@ -74,7 +74,7 @@ def test_outputs_and_no_overwrite(tmp_path):
     assert res.exit_code == 0
     lines = csv.read_text().splitlines()
     header = next(ln for ln in lines if not ln.startswith("#"))
-    assert header == "time_s,acceleration_mps2,acceleration_g,velocity_mps"
+    assert header == "time_s,accelerometer_mps2,accelerometer_g,velocity_mps"
     assert any(str(NORMATIVE) in ln for ln in lines if ln.startswith("#"))  # the commented metadata header
     before = csv.read_text()
     res = runner.invoke(app, ["simulate", str(NORMATIVE), "--output", str(csv)])

@@ -96,13 +96,21 @@ def test_read_units_from_header_and_options(files):
     ("time (ms), a (g)\n0,1\n2,2\n1,3\n", {}, "strictly increasing"),
     ("time (ms), a (g)\n0,1\n", {}, "at least 3 rows"),
     ("0,1\n1,2\n2,3\n", {"time_unit": "fortnight", "accel_unit": "g"}, "time unit"),
+    ("time (ms), a (g)\n0,1\n1,nan\n2,3\n", {}, "data row 2"),
+    ("time (ms), a (g)\n0,1\n1,2\n2,3\n", {"time_unit": "s"}, "the unit of column 'time (ms)'"),
+    ("time (ms), a (g)\n0,1\n1,2\n2,3\n", {"accel_unit": "m/s^2"}, "the unit of column ' a (g)'"),
 ])
 def test_bad_files_are_one_clear_error(tmp_path, text, kwargs, needle):
     p = tmp_path / "m.csv"
     p.write_text(text)
     with pytest.raises(ParameterError) as err:
         read_pulse_csv(p, **kwargs)
-    assert needle in str(err.value) and "\n" not in str(err.value)
+    assert needle in str(err.value) and "\n" not in str(err.value) and "np.float" not in str(err.value)
+
+
+def test_a_header_unit_repeated_by_the_option_is_fine(files):
+    r = read_pulse_csv(files / "clean.csv", time_unit="ms", accel_unit="g")
+    np.testing.assert_allclose(r.t, hertz_drop()[0], rtol=0, atol=1e-12)
 
 
 def test_align_shift_recovers_a_known_delay():
@@ -147,3 +155,50 @@ def test_cli_compare(files):
     assert res.exit_code == 2 and "--time-unit" in res.output
     res = runner.invoke(app, ["compare", str(files / "stack.toml"), str(files / "clean.csv"), "--cfc", "500"])
     assert res.exit_code == 2 and "--cfc" in res.output
+
+
+def test_negative_going_record_is_flipped_with_a_note(files, report, tmp_path):
+    """The clean record with its sign flipped (an accelerometer mounted upside down): compared as the
+    original, with a note; the shift is the clean record's (SHIFT, to 1e-8 s)."""
+    t, a = hertz_drop()
+    np.savetxt(tmp_path / "neg.csv", np.c_[t * 1e3, -a], delimiter=",", header="time (ms), acceleration (g)", comments="")
+    c = compare(report, read_pulse_csv(tmp_path / "neg.csv"))
+    assert c.shift == pytest.approx(SHIFT, abs=1e-8) and c.sprague_geers[2] < 1e-5
+    assert any("negative-going" in n for n in c.notes)
+
+
+def test_non_uniform_record_with_cfc_is_resampled_and_a_gap_named(files, report, tmp_path):
+    """Dropping every third sample of the 1 MHz record makes it non-uniform (mean rate 2/3 MHz): it is
+    resampled linearly and filtered; a 50-sample hole is named. Reference: the uniform record filtered
+    alike, the delay within one sample of the resampled rate (1.5 us)."""
+    t, a = hertz_drop()
+    keep = np.arange(t.size) % 3 != 2
+    keep[600:650] = False  # a hole of 50 samples (50 us) before the pulse
+    np.savetxt(tmp_path / "nu.csv", np.c_[t[keep], a[keep]], delimiter=",", header="time (s), acceleration (g)", comments="")
+    c = compare(report, read_pulse_csv(tmp_path / "nu.csv"), cfc=1000)
+    assert any("not uniform" in n and "before the CFC filter" in n for n in c.notes)
+    assert any("gap of" in n for n in c.notes)
+    assert c.shift == pytest.approx(SHIFT, abs=1.5e-6)
+
+
+def test_time_unit_mistake_is_one_clear_error(files, report, tmp_path):
+    """A record in s read as ms: the measured pulse lasts 1e-3 of the model's (a note; the noisy
+    record's 10 % width is the model's within 3 %, the 1 % noise moving its 10 % crossings). A record in ms
+    read as seconds: its samples are 1 ms apart, longer than the model's whole pulse (an error)."""
+    c = compare(report, read_pulse_csv(files / "bare.csv", time_unit="ms", accel_unit="g"))
+    assert any("times the model's" in n and "check the time unit" in n for n in c.notes)
+    assert c.measured_metrics.duration_10 * 1e3 == pytest.approx(report.top_pulse.duration_10, rel=0.03)
+    np.savetxt(tmp_path / "ms.csv", np.c_[hertz_drop()[0] * 1e3, hertz_drop()[1]], delimiter=",")
+    with pytest.raises(ParameterError) as err:
+        compare(report, read_pulse_csv(tmp_path / "ms.csv", time_unit="s", accel_unit="g"))
+    assert "check the time unit" in str(err.value)
+
+
+def test_three_columns_and_a_cut_pulse_are_noted(report, tmp_path):
+    t, a = hertz_drop()
+    cut = t < SHIFT + 1e-4  # the record ends inside the pulse (contact ~0.25 ms)
+    np.savetxt(tmp_path / "three.csv", np.c_[t[cut], a[cut], 0 * a[cut]], delimiter=",",
+               header="time (s), acceleration (g), temperature (K)", comments="")
+    c = compare(report, read_pulse_csv(tmp_path / "three.csv"), align="onset")
+    assert any("3 columns" in n for n in c.notes)
+    assert any("cuts the measured pulse" in n for n in c.notes)

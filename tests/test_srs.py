@@ -461,3 +461,36 @@ def test_pseudo_velocity_at_high_oversampling_against_an_ode():
     zz = sol.sol(np.linspace(0, t[-1] + 2 / fn, 400_001))[0]
     got = srs_uniform(a, fs, [fn], q, kind="pseudo-velocity").maximax[0]
     assert got == pytest.approx(w * np.max(np.abs(zz)), rel=1e-7)
+
+
+def test_pseudo_velocity_of_a_drop_over_five_decades_is_the_damped_velocity_step(tmp_path):
+    """The widest band a stack file allows (1 Hz-100 kHz, 5 decades; fs/f = 5e6 at 1 Hz): far below the
+    pulse's frequencies (contact ~0.3 ms) the pulse is a velocity step dV of the oscillator's base, whose
+    largest relative displacement is (dV/w) exp(-zeta acos(zeta)/sqrt(1 - zeta^2)) (the damped free
+    response (dV/w_d) e^(-zeta w t) sin(w_d t) at its first maximum, w_d t = acos zeta); PV = w z_max.
+    dV: the accelerometer's integral over the top's contact, from the run's own velocities
+    (launch - impact speed). Agreement to 1e-3 at 1 Hz (the pulse's length, w T ~ 2e-3, is the error)."""
+    import hertz_chain as hc
+
+    path = tmp_path / "pv.toml"
+    path.write_text("""
+[drop]
+impact_velocity = "1 m/s"
+gravity = 0
+[stack]
+masses = ["1 kg", "0.1 kg"]
+gaps = "1 mm"
+[contact]
+law = "hertz"
+stiffness = "1e9 N/m^1.5"
+[srs]
+type = "pseudo-velocity"
+band = ["1 Hz", "100 kHz"]
+""")
+    rep = hc.simulate_file(path)
+    s = rep.top_srs
+    assert s.frequencies_Hz[0] <= 1.0 and s.frequencies_Hz[-1] >= 1e5
+    dv = rep.launch_velocities[-1] + 1.0  # from -1 m/s (falling) to the launch velocity
+    z = 0.05
+    k = int(np.argmin(np.abs(s.frequencies_Hz - 1.0)))
+    assert s.maximax[k] == pytest.approx(dv * math.exp(-z * math.acos(z) / math.sqrt(1 - z * z)), rel=1e-3)

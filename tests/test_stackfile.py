@@ -709,6 +709,8 @@ def test_srs_section():
     ({"srs.peak": "max"}, "srs.peak", "'abs'"),
     ({"srs.type": "velocity"}, "srs.type", "pseudo-velocity"),
     ({"srs.per_octave": 100}, "srs.per_octave", "48"),
+    ({"srs.band": ["1 Hz", "1 GHz"]}, "srs.band", "5 decades"),
+    ({"srs.band": ["1e-6 Hz", "100 Hz"]}, "srs.band", "[0.01 Hz, 1e+07 Hz]"),
     ({"srs.window": 1}, "srs.window", "unknown"),
 ])
 def test_srs_section_errors(changes, key, fragment):
@@ -719,3 +721,18 @@ def test_one_mass_needs_no_gaps():
     spec = parse_stack({"drop": {"impact_velocity": "1 m/s"}, "stack": {"masses": ["0.1 kg"]},
                         "contact": {"law": "hertz", "stiffness": "1e9 N/m^1.5"}})
     assert spec.n == 1 and spec.stack.gap_list(1) == ()
+
+
+def test_set_of_an_alternative_key_replaces_the_files_other():
+    """`--set srs.q=20` on a file with srs.damping (and height for impact_velocity) replaces it, as
+    editing the file would; both given on the command line still conflict."""
+    from hertz_chain.stackfile import apply_overrides
+
+    doc = {"drop": {"impact_velocity": "1 m/s"}, "srs": {"damping": 0.05}}
+    out = apply_overrides(doc, ["srs.q=20", "drop.height=\"5 cm\""])
+    assert out == {"drop": {"height": "5 cm"}, "srs": {"q": 20}}
+    assert doc == {"drop": {"impact_velocity": "1 m/s"}, "srs": {"damping": 0.05}}  # the input untouched
+    both = apply_overrides(doc, ["srs.q=20", "srs.damping=0.1"])
+    assert both["srs"] == {"q": 20, "damping": 0.1}
+    with pytest.raises(StackFileError, match="conflicts"):
+        parse_stack(patched({"srs.q": 20, "srs.damping": 0.1}))

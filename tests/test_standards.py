@@ -10,6 +10,7 @@ References:
   a terminal-peak sawtooth has peak (pi/4) A: AD/2 = 2 (pi A/4) D/pi.
 """
 
+import dataclasses
 import json
 import math
 
@@ -109,7 +110,47 @@ def test_a_25_percent_high_pulse_fails_by_5_percent_of_the_peak():
 def test_without_tolerances_nothing_is_judged():
     t, a = half_sine_record()
     r = check_pulse(t, a, spec(peak_tolerance=None, duration_tolerance=None, velocity_tolerance=None, band=None))
-    assert all(c.passed is None for c in r.criteria) and not r.passed
+    assert all(c.passed is None for c in r.criteria) and r.passed is None and r.verdict == "NOT JUDGED"
+    assert "result: NOT JUDGED" in r.table() and r.to_dict()["verdict"] == "not judged"
+
+
+def sawtooth_record(fall, start=2e-4, D=1e-3, n=8001):
+    """A terminal-peak sawtooth of 100 g that falls linearly to zero over `fall` (s) after D."""
+    t = np.linspace(0, 2e-3, n)
+    s = t - start
+    a = np.where((s >= 0) & (s <= D), s / D, np.where((s > D) & (s <= D + fall), 1 - (s - D) / fall, 0.0))
+    return t, 100 * G0 * a
+
+
+def test_sawtooth_band_allows_the_fall_and_only_the_fall():
+    """The nominal sawtooth drops vertically at D: a real one falls within the allowance (default 0.1 D)
+    and passes with the whole band as margin; one that falls over 0.2 D leaves the band, by (closed
+    form, nominal start fixed by the best fit) at most half the excess fall: the worst point of a ramp
+    falling over 0.2 D against the allowance's ramp over 0.1 D is 0.5 A - 0.2 A = 0.3 A out at s = 0.1 D
+    for the same start; the fit may shift the nominal pulse, which can only help: margin in (-0.3 A, 0)."""
+    sp = spec(shape="sawtooth", peak_g=100.0, duration=1e-3, band=0.2, peak_tolerance=None,
+              duration_tolerance=None, velocity_tolerance=None)
+    assert sp.fall_time == pytest.approx(1e-4)
+    t, a = sawtooth_record(fall=0.5e-4)
+    r = check_pulse(t, a, sp)
+    band = next(c for c in r.criteria if c.name == "band")
+    assert band.passed and band.margin == pytest.approx(20.0, rel=1e-6) and any("fall" in n for n in r.notes)
+    t, a = sawtooth_record(fall=2e-4)
+    band = next(c for c in check_pulse(t, a, sp).criteria if c.name == "band")
+    assert not band.passed and -30.0 <= band.margin < 0
+    # a vertical-drop nominal (fall_time tiny) fails the same gentle fall: the allowance is what passes it
+    band = next(c for c in check_pulse(*sawtooth_record(fall=0.5e-4), dataclasses.replace(sp, fall_time=1e-9)).criteria
+                if c.name == "band")
+    assert not band.passed
+
+
+def test_a_standard_changed_by_the_test_section_says_so():
+    s = parse_test({"standard": "MIL-STD-883 2002 B", "peak_g": 1000})
+    assert s.name == "MIL-STD-883 2002 B, modified: peak_g 1000" and s.peak_g == 1000
+    s = parse_test({"standard": "MIL-STD-883 2002 B", "peak_g": 1500})  # the row's own value: not a change
+    assert s.name == "MIL-STD-883 2002 B"
+    s = parse_test({"standard": "MIL-STD-810 516 functional-flight", "duration": "6 ms"})
+    assert "modified: duration 6 ms" in s.name and s.fall_time == pytest.approx(6e-4)
 
 
 def test_test_section_overrides_the_row():
@@ -143,6 +184,16 @@ def test_cli_check_example_passes_and_list():
     assert peak["value"] == pytest.approx(1500, rel=1e-3)
     res = runner.invoke(app, ["check", "--standard", "list"])
     assert res.exit_code == 0 and all(c.name in res.stdout for c in conditions())
+    res = runner.invoke(app, ["check", "--standard", "list", "--json"])
+    assert res.exit_code == 0 and [r["name"] for r in json.loads(res.stdout)] == [c.name for c in conditions()]
+
+
+def test_cli_check_with_nothing_judged_is_not_a_failure(tmp_path):
+    text = open(EXAMPLE).read().split("[test]")[0] + '[test]\nstandard = "MIL-STD-883 2002 B"\n'
+    (tmp_path / "s.toml").write_text(text)  # the table's row alone: it has no tolerances
+    res = runner.invoke(app, ["check", str(tmp_path / "s.toml")])
+    assert res.exit_code == 0, res.output
+    assert "result: NOT JUDGED" in res.stdout and "nothing was judged" in res.stderr
 
 
 def test_cli_check_fails_with_exit_1_and_bad_input_with_2(tmp_path):
