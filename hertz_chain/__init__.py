@@ -65,6 +65,8 @@ _EXPORTS = {
     "G0": "constants",
     "OptimizeResult": "optimize",
     "optimize": "optimize",
+    "FitResult": "fit",
+    "fit": "fit",
     "PulseMetrics": "pulse",
     "pulse_metrics": "pulse",
     "DesignComparison": "rigid",
@@ -133,7 +135,7 @@ def __dir__():
 
 
 class _Package(types.ModuleType):
-    """Keeps the functions `simulate`, `srs`, `build`, `optimize` and `sweep` from being shadowed by their submodules of
+    """Keeps the functions `simulate`, `srs`, `build`, `optimize`, `fit` and `sweep` from being shadowed by their submodules of
     the same name when the import system binds a loaded submodule onto the package (as the eager
     `from .simulate import simulate` of a classic `__init__` would)."""
 
@@ -179,6 +181,7 @@ if TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
     from .materials import Material, contact_stiffness, effective_mass, material, material_names
     from .constants import G0, STANDARD_GRAVITY
     from .optimize import OptimizeResult, optimize
+    from .fit import FitResult, fit
     from .pulse import PulseMetrics, pulse_metrics
     from .rigid import (
         DesignComparison,

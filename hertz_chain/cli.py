@@ -11,6 +11,8 @@ Commands:
 - `hertz-chain sweep STACK.toml --output OUT.zarr [--workers N | --scheduler ADDR] [--resume] [--json]` —
   a design space into a Zarr store that survives a kill (`hertz_chain.sweep`).
 - `hertz-chain plot OUT.zarr --x KEY [--y KEY] [--var NAME] --output F.png` — a line or a map from a sweep.
+- `hertz-chain fit STACK.toml MEASURED.csv --vary contact.stiffness[0] [--write F.toml] [--plot F.png]` —
+  contact parameters fitted to a measured pulse by least squares, with standard errors (`hertz_chain.fit`).
 - `hertz-chain check STACK.toml [--standard NAME] [--json] [--plot F.png]` — the top pulse against a
   shock-test condition (`hertz_chain.standards`; exit 1 when a criterion fails); `--standard list`.
 - `hertz-chain compare STACK.toml MEASURED.csv [--cfc N] [--align xcorr|onset|none] [--json] [--plot F.png]`
@@ -71,6 +73,13 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 OUTPUT_SUFFIXES = (".nc", ".csv")
 PLOT_SUFFIXES = (".png",)
+
+# options shared by several commands
+_SET = typer.Option([], "--set", help="Override a stack-file key: --set drop.height=\"30 cm\" (repeatable).")
+_MEASURED = typer.Argument(..., help="Measured pulse: CSV with a time and an acceleration column.")
+_TIME_UNIT = typer.Option(None, "--time-unit", help="Unit of the time column (s, ms, us).")
+_CFC = typer.Option(None, "--cfc", help="Filter both by SAE J211 / ISO 6487 class 60, 180, 600 or 1000.")
+_ACCEL_UNIT = typer.Option(None, "--accel-unit", help="Unit of the acceleration column (g, m/s^2, ft/s^2).")
 
 
 def _one_line(text: object) -> str:
@@ -156,7 +165,7 @@ def simulate(
     plot: Optional[Path] = typer.Option(None, "--plot", help="Write a figure (PNG)."),
     output: Optional[Path] = typer.Option(None, "--output", "-o", help="Write .nc (NetCDF) or .csv."),
     force: bool = typer.Option(False, "--force", help="Overwrite existing output files."),
-    overrides: list[str] = typer.Option([], "--set", help="Override a stack-file key: --set drop.height=\"30 cm\" (repeatable)."),
+    overrides: list[str] = _SET,
 ) -> None:
     """Simulate a stack file with compliant contacts and compare it with the rigid model."""
     from . import _paths
@@ -312,7 +321,7 @@ def check(
     as_json: bool = typer.Option(False, "--json", help="Print the result as JSON."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Draw the pulse inside its band (PNG)."),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing plot."),
-    overrides: list[str] = typer.Option([], "--set", help="Override a stack-file key: --set drop.height=\"30 cm\" (repeatable)."),
+    overrides: list[str] = _SET,
 ) -> None:
     """Check the top pulse against a shock-test condition: peak, duration, velocity change, band (exit 1 on FAIL)."""
     from . import _paths
@@ -369,32 +378,37 @@ def check(
         raise typer.Exit(code=EXIT_CHECK_FAILED)
 
 
+def _check_align_cfc(align: str, cfc: int | None) -> None:
+    """`--align` and `--cfc` of compare and fit: one line and exit 2 unless allowed."""
+    from .filters import CFC_CLASSES
+    from .measured import ALIGNMENTS
+
+    if align not in ALIGNMENTS:
+        _fail(f"--align = {align!r} is invalid: one of {', '.join(ALIGNMENTS)}")
+    if cfc is not None and cfc not in CFC_CLASSES:
+        _fail(f"--cfc = {cfc} is invalid: one of {', '.join(map(str, CFC_CLASSES))}")
+
+
 @app.command()
 def compare(
     stack_file: Path = typer.Argument(..., help="Stack file whose top pulse is compared."),
-    measured: Path = typer.Argument(..., help="Measured pulse: CSV with a time and an acceleration column."),
-    time_unit: Optional[str] = typer.Option(None, "--time-unit", help="Unit of the time column (s, ms, us)."),
-    accel_unit: Optional[str] = typer.Option(None, "--accel-unit", help="Unit of the acceleration column (g, m/s^2)."),
-    cfc: Optional[int] = typer.Option(None, "--cfc", help="Filter both by SAE J211 / ISO 6487 class 60, 180, 600 or 1000."),
+    measured: Path = _MEASURED,
+    time_unit: Optional[str] = _TIME_UNIT,
+    accel_unit: Optional[str] = _ACCEL_UNIT,
+    cfc: Optional[int] = _CFC,
     align: str = typer.Option("xcorr", "--align", help="Time alignment: xcorr, onset or none."),
     as_json: bool = typer.Option(False, "--json", help="Print the comparison as JSON."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Overlay the pulses and their SRS (PNG)."),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing plot."),
-    overrides: list[str] = typer.Option([], "--set", help="Override a stack-file key: --set drop.height=\"30 cm\" (repeatable)."),
+    overrides: list[str] = _SET,
 ) -> None:
     """Compare the model's top pulse with a measured pulse: metrics, SRS and Sprague-Geers errors."""
     from . import _paths
-    from .measured import ALIGNMENTS, read_pulse_csv
+    from .measured import read_pulse_csv
     from .stackfile import load_stack_file
 
     try:
-        if align not in ALIGNMENTS:
-            _fail(f"--align = {align!r} is invalid: one of {', '.join(ALIGNMENTS)}")
-        if cfc is not None:
-            from .filters import CFC_CLASSES
-
-            if cfc not in CFC_CLASSES:
-                _fail(f"--cfc = {cfc} is invalid: one of {', '.join(map(str, CFC_CLASSES))}")
+        _check_align_cfc(align, cfc)
         if plot is not None:
             _paths.check_output_path(plot, "--plot", PLOT_SUFFIXES, force)
         spec = load_stack_file(stack_file, overrides)
@@ -422,6 +436,69 @@ def compare(
             _fail(str(exc))
     for note in comparison.notes:
         typer.echo(f"hertz-chain: note: {_one_line(note)}", err=True)
+
+
+@app.command()
+def fit(
+    stack_file: Path = typer.Argument(..., help="Stack file whose contacts are fitted (its \\[fit] section is optional)."),
+    measured: Path = _MEASURED,
+    vary: list[str] = typer.Option([], "--vary", help="A parameter to fit: contact.stiffness[1], contact.restitution[0] (repeatable)."),
+    time_unit: Optional[str] = _TIME_UNIT,
+    accel_unit: Optional[str] = _ACCEL_UNIT,
+    cfc: Optional[int] = _CFC,
+    align: str = typer.Option("xcorr", "--align", help="How the starting time shift is found: xcorr, onset or none."),
+    as_json: bool = typer.Option(False, "--json", help="Print the result as JSON."),
+    write: Optional[Path] = typer.Option(None, "--write", "-w", help="Write the fitted stack as a stack file (.toml)."),
+    plot: Optional[Path] = typer.Option(None, "--plot", help="Draw the measured, start and fitted pulses (PNG)."),
+    force: bool = typer.Option(False, "--force", help="Overwrite existing output files."),
+    overrides: list[str] = _SET,
+) -> None:
+    """Fit contact stiffness and restitution to a measured pulse by least squares, with standard errors."""
+    from . import _paths
+    from .fit import read_fit_file
+    from .measured import read_pulse_csv
+
+    try:
+        _check_align_cfc(align, cfc)
+        if write is not None and plot is not None and os.path.abspath(write) == os.path.abspath(plot):
+            _fail(f"--plot {plot}: the same file as --write")
+        if write is not None:
+            _paths.check_output_path(write, "--write", (".toml",), force)
+            if os.path.exists(stack_file) and os.path.abspath(write) == os.path.abspath(stack_file):
+                _fail(f"--write {write}: the input stack file itself; write the fitted stack to another file")
+        if plot is not None:
+            _paths.check_output_path(plot, "--plot", PLOT_SUFFIXES, force)
+        read_fit_file(stack_file, vary, overrides)
+        record = read_pulse_csv(measured, time_unit=time_unit, accel_unit=accel_unit)
+    except HertzChainError as exc:
+        _fail(str(exc))
+    from . import report
+    from .fit import fit as run_fit
+
+    try:
+        result = run_fit(stack_file, record, vary, cfc=cfc, align=align, overrides=overrides)
+    except SolverError as exc:
+        typer.echo(f"hertz-chain: {Status.FAILED.text}: {_one_line(exc)}", err=True)
+        raise typer.Exit(code=Status.FAILED.exit_code)
+    except HertzChainError as exc:
+        _fail(str(exc))
+    typer.echo(report.to_json(result.to_dict()) if as_json else result.table())
+    try:
+        if write is not None:
+            _paths.write_atomically(write, lambda tmp: Path(tmp).write_text(result.document, encoding="utf-8"),
+                                    force, "--write")
+        if plot is not None:
+            from . import plot as plotting
+
+            _paths.write_atomically(plot, lambda tmp: plotting.plot_fit(result, tmp), force, "--plot")
+    except HertzChainError as exc:
+        _fail(str(exc))
+    for note in result.fitted.notes:
+        typer.echo(f"hertz-chain: note: {_one_line(note)}", err=True)
+    if not result.status.ok:
+        typer.echo(f"hertz-chain: fit {result.status.text}: {_one_line(result.message)}; the last point is "
+                   "reported", err=True)
+        raise typer.Exit(code=result.status.exit_code)
 
 
 @app.command("plot")

@@ -48,6 +48,7 @@ __all__ = [
     "sprague_geers",
     "align_shift",
     "compare",
+    "prepare_record",
 ]
 
 #: Time units of a measured record: name -> seconds.
@@ -312,7 +313,37 @@ class Comparison:
         }
 
 
-def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: str = "xcorr") -> Comparison:
+def prepare_record(measured: MeasuredPulse, cfc: int | None = None) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """The measured record as :func:`compare` and `hertz_chain.fit` use it, before any filter:
+    `(t, a, notes)` on a uniform grid (a non-uniform record resampled linearly at its mean rate, a
+    note naming any gap longer than 5 mean steps), with a negative-going record's sign flipped (a
+    note). `cfc` only changes the note's wording (the filter is applied by the caller)."""
+    t = np.asarray(measured.t, dtype=float)
+    h = (t[-1] - t[0]) / (t.size - 1)
+    notes = list(measured.notes)
+    dt = np.diff(t)
+    uniform = np.max(np.abs(dt - h)) <= 1e-6 * h
+    if not uniform:
+        t_u = t[0] + h * np.arange(t.size)
+        m_u = np.interp(t_u, t, measured.a)
+        notes.append(f"the measurement's times are not uniform: resampled linearly at its mean rate {1 / h:.6g} Hz"
+                     + (" before the CFC filter" if cfc is not None else ""))
+        if dt.max() > 5 * h:
+            i = int(np.argmax(dt))
+            notes.append(f"the measurement has a gap of {dt[i] * 1e3:.4g} ms ({dt[i] / h:.3g} mean steps) after "
+                         f"t = {t[i] * 1e3:.6g} ms: the resampled record is a straight line across it")
+        t = t_u
+    else:
+        m_u = np.asarray(measured.a, dtype=float)
+    if pulse_metrics(t, m_u).sign < 0:
+        m_u = -m_u
+        notes.append("the measured pulse is negative-going (its largest excursion is below zero): it is compared "
+                     "with its sign flipped, as the model's top pulse is positive (upward acceleration)")
+    return t, m_u, notes
+
+
+def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: str = "xcorr",
+            shift: float | None = None) -> Comparison:
     """Compare the top pulse of a simulated stack with a measured pulse.
 
     **Arguments:**
@@ -323,6 +354,8 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
     - `cfc`: filter both the measurement and the model by this channel frequency class (60, 180, 600,
       1000; `hertz_chain.filters.cfc_filter`), as a lab's data channel would; None: no filter.
     - `align`: `"xcorr"` (default), `"onset"` or `"none"` (`align_shift`).
+    - `shift`: a time shift (s) to use as it is instead of aligning (`hertz_chain.fit` passes its
+      fitted shift); `alignment` then reads `"given"`.
 
     The model's accelerometer (`analysis.accelerometer`: the dense solution) is sampled on the
     measurement's grid, shifted, filtered alike; outside the run it reads zero (free flight before
@@ -347,30 +380,10 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
         raise ParameterError("align", align, f"one of {', '.join(ALIGNMENTS)}")
     if report.top_pulse is None:
         raise ParameterError("report", "no top pulse", "a run in which the top mass was struck")
-    t = np.asarray(measured.t, dtype=float)
-    h = (t[-1] - t[0]) / (t.size - 1)
-    notes = list(measured.notes)
-    dt = np.diff(t)
-    uniform = np.max(np.abs(dt - h)) <= 1e-6 * h
-    if not uniform:
-        t_u = t[0] + h * np.arange(t.size)
-        m_u = np.interp(t_u, t, measured.a)
-        notes.append(f"the measurement's times are not uniform: resampled linearly at its mean rate {1 / h:.6g} Hz"
-                     + (" before the CFC filter" if cfc is not None else ""))
-        if dt.max() > 5 * h:
-            i = int(np.argmax(dt))
-            notes.append(f"the measurement has a gap of {dt[i] * 1e3:.4g} ms ({dt[i] / h:.3g} mean steps) after "
-                         f"t = {t[i] * 1e3:.6g} ms: the resampled record is a straight line across it")
-        t = t_u
-    else:
-        m_u = np.asarray(measured.a, dtype=float)
-    sol_t = np.asarray(report.solution.steps.t, dtype=float)
     top = report.top_pulse
-    polarity = pulse_metrics(t, m_u).sign
-    if polarity < 0:
-        m_u = -m_u
-        notes.append("the measured pulse is negative-going (its largest excursion is below zero): it is compared "
-                     "with its sign flipped, as the model's top pulse is positive (upward acceleration)")
+    t, m_u, notes = prepare_record(measured, cfc)
+    h = (t[-1] - t[0]) / (t.size - 1)
+    sol_t = np.asarray(report.solution.steps.t, dtype=float)
     h_model = top.duration_10
     if h_model < 2 * h:
         raise ParameterError(f"{measured.source or 'measured'}: sample interval", f"{h * 1e3:.6g} ms",
@@ -386,8 +399,11 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
     # first place the model's main pulse in the middle of the record's pulse, then align finely
     meas_pm = pulse_metrics(t, m_u)
     coarse = (0.5 * (meas_pm.t_start_10 + meas_pm.t_end_10)) - 0.5 * (top.t_start_10 + top.t_end_10)
-    model_raw = model_on(t - coarse)
-    shift = coarse + align_shift(t, m_u, model_raw, align) if align != "none" else 0.0
+    if shift is None:
+        model_raw = model_on(t - coarse)
+        shift = coarse + align_shift(t, m_u, model_raw, align) if align != "none" else 0.0
+    else:
+        align = "given"
     model = model_on(t - shift)
     meas = m_u
     if cfc is not None:

@@ -225,6 +225,38 @@ def plot_check(result, path: str | Path) -> None:
     plt.close(fig)
 
 
+def plot_fit(result, path: str | Path) -> None:
+    """A fit (`hertz_chain.fit.FitResult`): the measured pulse with the file's and the fitted model's
+    (g, ms), and their SRS (log-log), the fitted values with their standard errors in the legend."""
+    plt = _pyplot()
+    s, f = result.start, result.fitted
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 4.8), constrained_layout=True)
+    ax.plot(f.t * 1e3, f.measured / G0, color="0.2", lw=1.0, label="measured")
+    ax.plot(s.t * 1e3, s.model / G0, color="C0", lw=1.0, ls="--", label=f"start (C = {s.sprague_geers[2]:.3f})")
+    ax.plot(f.t * 1e3, f.model / G0, color="C3", lw=1.4, label=f"fitted (C = {f.sprague_geers[2]:.3f})")
+    for p in result.parameters:
+        unit = "" if p.unit == "1" else f" {p.unit}"
+        ax.plot([], [], " ", label=f"{p.label} = {p.value:.5g} ± {p.standard_error:.2g}{unit}")
+    ax.grid(True, alpha=0.4)
+    ax.set(xlabel="time (ms)", ylabel="acceleration (g)",
+           title=f"fit: {result.status.text}, rms residual {result.rms_residual_g:.3g} g"
+           + (f" (CFC {f.cfc})" if f.cfc else ""))
+    ax.legend(fontsize="small")
+    _srs_panel(bx, f.srs_frequencies_Hz, [(f.measured_srs, "measured", "0.2", "-"),
+                                          (s.model_srs, "start", "C0", "--"), (f.model_srs, "fitted", "C3", "-")])
+    fig.savefig(path, dpi=120, format="png")
+    plt.close(fig)
+
+
+def _srs_panel(bx, f, curves) -> None:
+    """Maximax SRS curves `(values, label, colour, linestyle)` on log-log axes with a grid."""
+    for values, label, colour, ls in curves:
+        bx.loglog(f, values, color=colour, ls=ls, label=label)
+    bx.grid(True, which="both", alpha=0.4)
+    bx.set(xlabel="natural frequency (Hz)", ylabel="maximax SRS (g), Q = 10", title="Shock response spectra")
+    bx.legend(fontsize="small")
+
+
 def plot_compare(comparison, path: str | Path) -> None:
     """Model against measurement (`hertz_chain.measured.Comparison`): the two pulses (g, ms) and their
     SRS (log-log, decade ticks), with the Sprague–Geers errors in the title."""
@@ -238,10 +270,6 @@ def plot_compare(comparison, path: str | Path) -> None:
     ax.set(xlabel="time (ms)", ylabel="acceleration (g)",
            title=f"Sprague–Geers M {M:+.3f}, P {P:.3f}, C {C:.3f}" + (f" (CFC {c.cfc})" if c.cfc else ""))
     ax.legend(fontsize="small")
-    bx.loglog(c.srs_frequencies_Hz, c.measured_srs, color="0.2", label="measured")
-    bx.loglog(c.srs_frequencies_Hz, c.model_srs, color="C3", label="model")
-    bx.grid(True, which="both", alpha=0.4)
-    bx.set(xlabel="natural frequency (Hz)", ylabel="maximax SRS (g), Q = 10", title="Shock response spectra")
-    bx.legend(fontsize="small")
+    _srs_panel(bx, c.srs_frequencies_Hz, [(c.measured_srs, "measured", "0.2", "-"), (c.model_srs, "model", "C3", "-")])
     fig.savefig(path, dpi=120, format="png")
     plt.close(fig)

@@ -124,16 +124,16 @@ DESIGN_KINDS = ("mvg", "met")
 SHAPES = ("sphere", "flat")
 
 _TOP_KEYS = ("title", "drop", "stack", "ground", "contact", "materials", "solver", "optimize", "sweep", "test",
-             "srs")
+             "srs", "fit")
 _SRS_KEYS = ("q", "damping", "per_octave", "band", "peak", "type")
 #: Where an SRS band may lie (Hz), and its largest f_max/f_min: the filters run at 50 samples per cycle of
 #: f_max and pad the record by a cycle of f_min, so the work grows as f_max/f_min (5 decades: 5e6
 #: samples per frequency), and the pseudo-velocity's discretisation is checked to fs/f = 1e5 (docs).
 SRS_BAND_LIMITS = (0.01, 1e7)
 SRS_MAX_SPAN = 1e5
-# `optimize`, `sweep` and `test` are read by `hertz_chain.optimize`, `hertz_chain.sweep` and
-# `hertz_chain.standards` (docs/optimize.md, docs/lab-workflow.md,
-# docs/sweeps.md); simulating such a file runs its base stack
+# `optimize`, `sweep`, `test` and `fit` are read by `hertz_chain.optimize`, `hertz_chain.sweep`,
+# `hertz_chain.standards` and `hertz_chain.fit` (docs/optimize.md, docs/sweeps.md,
+# docs/lab-workflow.md); simulating such a file runs its base stack
 _DROP_KEYS = ("ground", "impact_velocity", "height", "gravity")
 _STACK_KEYS = ("masses", "design", "gaps", "velocities", "preload", "material", "radius", "shape")
 _DESIGN_KEYS = ("kind", "n", "restitution", "bottom_mass", "top_mass", "mass_ratio")

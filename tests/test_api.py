@@ -17,9 +17,10 @@ def test_functions_are_not_shadowed_by_their_submodules():
     import hertz_chain.optimize  # noqa: F401
     import hertz_chain.srs  # noqa: F401
     import hertz_chain.sweep  # noqa: F401
+    import hertz_chain.fit  # noqa: F401
 
     assert callable(hc.simulate) and callable(hc.srs) and callable(hc.build)
-    assert callable(hc.optimize) and callable(hc.sweep)
+    assert callable(hc.optimize) and callable(hc.sweep) and callable(hc.fit)
 
 
 def test_import_and_cli_help_do_not_import_jax():
