@@ -142,20 +142,98 @@ def _check_design_inputs(ratio, bottom_mass, top_mass, restitution) -> None:
 @app.command()
 def design(
     ratio: Optional[float] = typer.Option(None, "--mass-ratio", "--ratio", "-R", help="R = m_n / m_1 (0 < R < 1)."),
-    bottom_mass: Optional[float] = typer.Option(None, "--bottom-mass", "--m1", help="Bottom mass m_1 in kg (scales the design)."),
-    top_mass: Optional[float] = typer.Option(None, "--top-mass", "--mn", help="Top mass m_n in kg (with --bottom-mass, instead of R)."),
+    bottom_mass: Optional[str] = typer.Option(None, "--bottom-mass", "--m1", help="Bottom mass m_1, e.g. \"8 kg\" (a plain number is kg)."),
+    top_mass: Optional[str] = typer.Option(None, "--top-mass", "--mn", help="Top mass m_n, e.g. \"100 g\" (with --bottom-mass, instead of R)."),
     restitution: float = typer.Option(..., "--restitution", "-e", help="Restitution e of every impact."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
+    write: Optional[Path] = typer.Option(None, "--write", "-w", help="Write a design as a stack file (.toml) that simulate runs."),
+    kind: str = typer.Option("mvg", "--kind", help="The design --write writes: mvg or met."),
+    stiffness: Optional[str] = typer.Option(None, "--stiffness", help="Contact stiffness for --write, e.g. \"1e9 N/m^1.5\"."),
+    law: str = typer.Option("tsuji", "--law", help="Contact law for --write (restitution e at every interface)."),
+    impact_velocity: str = typer.Option("1 m/s", "--impact-velocity", help="Drop speed for --write."),
+    gap: str = typer.Option("0 m", "--gap", help="Gap between neighbouring masses for --write (0: a touching stack)."),
+    force: bool = typer.Option(False, "--force", help="Overwrite an existing --write file."),
 ) -> None:
-    """The optimal MVG design (Eqs 15, 20, 22-24) and the MET design (Eqs 25-30), compared."""
+    """The optimal MVG design (Eqs 15, 20, 22-24) and the MET design (Eqs 25-30), compared; --write makes a stack file."""
     from . import report, workflow
 
     try:
-        _check_design_inputs(ratio, bottom_mass, top_mass, restitution)
-        result = workflow.design_report(ratio=ratio, m1=bottom_mass, mn=top_mass, e=restitution)
+        m1, mn = _mass_option(bottom_mass, "--bottom-mass"), _mass_option(top_mass, "--top-mass")
+        _check_design_inputs(ratio, m1, mn, restitution)
+        if write is not None:
+            doc = _design_document(kind, stiffness, law, impact_velocity, gap, restitution, write, force)
+        result = workflow.design_report(ratio=ratio, m1=m1, mn=mn, e=restitution)
     except HertzChainError as exc:
         _fail(str(exc))
     typer.echo(report.to_json(report.design_dict(result)) if as_json else report.design_table(result))
+    if write is not None:
+        from . import _paths
+
+        text = _design_text(result, kind, doc, m1 is not None)
+        try:
+            _paths.write_atomically(write, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"), force, "--write")
+        except HertzChainError as exc:
+            _fail(str(exc))
+        if not as_json:
+            typer.echo(f"wrote the {kind.upper()} stack to {write} (hertz-chain simulate {write})")
+
+
+def _mass_option(raw: str | None, flag: str) -> float | None:
+    """A mass option: `"8 kg"`, `"100 g"`, or a plain number of kg."""
+    from .stackfile import parse_quantity
+
+    if raw is None:
+        return None
+    try:
+        return parse_quantity(float(raw), "mass", flag)
+    except ValueError:
+        return parse_quantity(raw, "mass", flag)
+
+
+def _design_document(kind, stiffness, law, impact_velocity, gap, e, write, force) -> dict:
+    """The `[drop]`, `[stack]` gaps and `[contact]` of `design --write`, checked as a stack file would
+    be (one line naming the option on error), before anything is designed."""
+    from . import _paths
+    from .registry import LAWS
+    from .stackfile import parse_quantity, parse_stack
+
+    _paths.check_output_path(write, "--write", (".toml",), force)
+    if kind not in ("mvg", "met"):
+        _fail(f"--kind = {kind!r} is invalid: mvg or met")
+    if stiffness is None:
+        _fail("--stiffness: missing; --write needs the contact stiffness, e.g. --stiffness \"1e9 N/m^1.5\"")
+    if law not in LAWS:
+        _fail(f"--law = {law!r} is invalid: one of {', '.join(LAWS)}")
+    parse_quantity(impact_velocity, "velocity", "--impact-velocity")
+    parse_quantity(gap, "length", "--gap")
+    doc = {"drop": {"impact_velocity": impact_velocity}, "stack": {"masses": ["1 kg", "0.5 kg"], "gaps": gap},
+           "contact": {"law": law, "stiffness": stiffness, "restitution": e}}
+    try:
+        parse_stack(doc)  # the options as the stack file will hold them
+    except HertzChainError as exc:
+        msg = str(exc)
+        for key, flag in (("contact.stiffness", "--stiffness"), ("contact.restitution", "--restitution"),
+                          ("stack.gaps", "--gap"), ("drop.impact_velocity", "--impact-velocity"),
+                          ("contact", "--law")):
+            msg = msg.replace(key, flag)
+        _fail(msg)
+    return doc
+
+
+def _design_text(result, kind: str, doc: dict, in_kg: bool) -> str:
+    """The stack file of the chosen design: explicit masses (kg; units of m_1 when no mass was given)."""
+    import tomli_w
+
+    d = result.mvg if kind == "mvg" else result.met
+    doc = dict(doc)
+    doc["stack"] = dict(doc["stack"], masses=[f"{float(m)!r} kg" for m in d.masses])
+    head = [f"# The {d.kind} stack of the rigid theory for R = {result.R:.6g}, e = {doc['contact']['restitution']:g}:",
+            f"# {d.n} masses, rigid gain G = {d.gain:.6g} (paper Eq {'20' if kind == 'mvg' else '29'}), written by",
+            "# hertz-chain design --write. The rigid gain assumes independent collisions; this file's compliant",
+            "# contacts, gaps and gravity decide what the stack really does: hertz-chain simulate FILE."]
+    if not in_kg:
+        head.append("# No mass was given: the masses are in units of m_1 = 1 kg.")
+    return "\n".join(head) + "\n" + tomli_w.dumps({"title": f"{d.kind} design, R = {result.R:.6g}"} | doc)
 
 
 @app.command()

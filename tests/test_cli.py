@@ -7,6 +7,7 @@ Expected gains: paper Eq 19 written out here; for the normative example (issue #
 import json
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -170,3 +171,33 @@ def test_design_says_when_the_top_masses_differ():
     assert d["note"] and "unequal top masses" in d["note"]
     res = runner.invoke(app, ["design", "--bottom-mass", "8.4", "--top-mass", "0.1", "--restitution", "0.8"])
     assert "note: the designs end at different top masses" in res.stdout
+
+
+def test_design_takes_units_and_writes_a_stack_file_that_simulates(tmp_path):
+    """`--bottom-mass "8.4 kg" --top-mass "100 g"` = 8.4 and 0.1 kg; `--write` gives the MVG stack of
+    paper Eq 15 (m_i = m_1 R^((i-1)/(n-1)), n = 6 by Eqs 20/22-24 for R = 0.0119, e = 0.8); simulated with
+    5 cm gaps, no gravity and Tsuji contacts (e independent of speed: independent collisions of the
+    rigid model), its top gain is Eq 20's to 1e-6."""
+    out = tmp_path / "d.toml"
+    res = runner.invoke(app, ["design", "--bottom-mass", "8.4 kg", "--top-mass", "100 g", "-e", "0.8", "--write",
+                              str(out), "--stiffness", "1e9 N/m^1.5", "--gap", "5 cm"])
+    assert res.exit_code == 0, res.output
+    spec = tomllib.loads(out.read_text())
+    R, e, n = 0.1 / 8.4, 0.8, 6
+    masses = [float(m.split()[0]) for m in spec["stack"]["masses"]]
+    np.testing.assert_allclose(masses, 8.4 * R ** (np.arange(n) / (n - 1)), rtol=1e-12)
+    res = runner.invoke(app, ["simulate", str(out), "--json", "--set", "drop.gravity=0", "--set", 'solver.until="launch"'])
+    assert res.exit_code == 0, res.output
+    eq20 = (1 + e) ** n / (1 + R ** (1 / (n - 1))) ** (n - 1) - 1
+    assert json.loads(res.stdout)["top_velocity_gain"] == pytest.approx(eq20, rel=1e-6)
+    # the same masses from plain numbers (kg) and grams
+    a = runner.invoke(app, ["design", "--m1", "8.4", "--mn", "100 g", "-e", "0.8", "--json"])
+    assert json.loads(a.stdout)["mvg"]["masses"] == pytest.approx(masses, rel=1e-12)
+    for args, needle in ((["--write", str(tmp_path / "x.toml")], "--stiffness: missing"),
+                         (["--write", str(tmp_path / "x.toml"), "--stiffness", "1e9 kg"], "--stiffness"),
+                         (["--write", str(tmp_path / "x.toml"), "--stiffness", "1e9 N/m^1.5", "--kind", "best"], "--kind"),
+                         (["--write", str(out), "--stiffness", "1e9 N/m^1.5"], "exists"),
+                         (["--bottom-mass", "8 m"], "--bottom-mass")):
+        res = runner.invoke(app, ["design", "-R", "0.012", "-e", "0.8", *args] if "--bottom-mass" not in args
+                            else ["design", "--top-mass", "1 kg", "-e", "0.8", *args])
+        assert res.exit_code == 2 and needle in res.output and len(res.output.strip().splitlines()) == 1, res.output
