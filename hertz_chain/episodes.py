@@ -37,8 +37,11 @@ class ContactEpisode:
     `separation_velocity` is `-delta_dot` at the end (> 0 while separating).
     `complete` is False when the contact was already closed at the first sample or still closed at the
     last one; its restitution is then NaN, by design, and says so. `peak_force` is the largest sample
-    (the value the exported data hold); `peak_force_time` the time of the peak of the parabola through
-    it and its neighbours (`parabolic_peak`).
+    (the value the exported data hold); `peak_force_time` and `peak_force_refined` the time and value of
+    the peak of the parabola through it and its neighbours (`parabolic_peak`; never below the largest
+    sample), the better estimate of the true peak between the solver's steps (O(h^2) of the local step;
+    the sample alone is low by O(h^2) too, with a larger constant: docs/references.md, "Peaks between
+    steps").
     """
 
     interface: int
@@ -50,6 +53,7 @@ class ContactEpisode:
     separation_velocity: float
     complete: bool
     peak_force_time: float = float("nan")
+    peak_force_refined: float = float("nan")
 
     @property
     def duration(self) -> float:
@@ -286,6 +290,7 @@ def contact_episodes(
                     max_overlap=refined_peak(t, d[:, j], r[:, j], i0, i1)[1],
                     peak_force=float(f[run, j].max()),
                     peak_force_time=parabolic_peak(t, f[:, j], i0, i1)[0],
+                    peak_force_refined=max(parabolic_peak(t, f[:, j], i0, i1)[1], float(f[run, j].max())),
                     approach_velocity=float(v_in),
                     separation_velocity=float(-v_out),
                     complete=bool(complete),

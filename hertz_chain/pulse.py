@@ -12,7 +12,10 @@ is read between its 10 % points, as in docs/references.md, "Shock pulses"):
 
 * **dominant sign** `s`: +1 if `max(a) >= -min(a)`, else −1 (ties go to +1). All the metrics below are
   taken on `s·a`, so that the main pulse is positive; `peak` is a magnitude (> 0) and `sign` keeps `s`.
-* **peak** `= max(s·a)` and **time of peak** (the first sample reaching it; no interpolation).
+* **peak** `= max(s·a)` and **time of peak**: the first sample reaching it or, when the caller passes
+  the `velocity` (as the report does), the largest value of the slope of the velocity's cubic Hermite
+  interpolant between the samples around it (so the report's peak can exceed the exported samples,
+  by O(h²) of the local step; docs/references.md, "Peaks between steps").
 * **main pulse at level L**: the maximal interval around the peak over which `s·a(t) >= L·peak`.
   `t_start_10`/`t_end_10` are its ends for `L = duration_level` (10 % by default) and
   **duration_10** their difference. Half-sine of duration `D`: `(1 − 2 asin(0.1)/π)·D = 0.93623·D`.

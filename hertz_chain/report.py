@@ -48,6 +48,7 @@ def _episode_dict(ep) -> dict:
         "separation_velocity_mps": ep.separation_velocity,
         "max_overlap_m": ep.max_overlap,
         "peak_force_N": ep.peak_force,
+        "peak_force_refined_N": _num(ep.peak_force_refined),
         "peak_force_time_s": _num(ep.peak_force_time),
         "complete": ep.complete,
     }
