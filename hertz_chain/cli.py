@@ -53,6 +53,8 @@ from typing import Optional
 
 import typer
 
+from ._progress import progress
+
 from .errors import HertzChainError, SolverError
 from .status import EXIT_BAD_INPUT, Status
 
@@ -262,7 +264,8 @@ def simulate(
     from . import report, workflow
 
     try:
-        result = workflow.run_spec(spec)
+        with progress(f"simulating {stack_file.name}"):
+            result = workflow.run_spec(spec)
     except SolverError as exc:
         typer.echo(f"hertz-chain: {Status.FAILED.text}: {_one_line(exc)}", err=True)
         raise typer.Exit(code=Status.FAILED.exit_code)
@@ -317,7 +320,8 @@ def optimize(
     from .optimize import optimize as run_optimize
 
     try:
-        result = run_optimize(stack_file)
+        with progress(f"optimising {stack_file.name}"):
+            result = run_optimize(stack_file)
     except HertzChainError as exc:
         _fail(str(exc))
     typer.echo(report.to_json(result.to_dict()) if as_json else report.optimize_table(result))
@@ -431,7 +435,8 @@ def check(
     from .standards import check as run_check
 
     try:
-        result_report, result = run_check(stack_file, standard, overrides)
+        with progress(f"simulating {stack_file.name}"):
+            result_report, result = run_check(stack_file, standard, overrides)
     except SolverError as exc:
         typer.echo(f"hertz-chain: {Status.FAILED.text}: {_one_line(exc)}", err=True)
         raise typer.Exit(code=Status.FAILED.exit_code)
@@ -497,8 +502,9 @@ def compare(
     from .measured import compare as run_compare
 
     try:
-        result_report = workflow.run_spec(spec)
-        comparison = run_compare(result_report, record, cfc=cfc, align=align)
+        with progress(f"simulating {stack_file.name}"):
+            result_report = workflow.run_spec(spec)
+            comparison = run_compare(result_report, record, cfc=cfc, align=align)
     except SolverError as exc:
         typer.echo(f"hertz-chain: {Status.FAILED.text}: {_one_line(exc)}", err=True)
         raise typer.Exit(code=Status.FAILED.exit_code)
@@ -554,7 +560,8 @@ def fit(
     from .fit import fit as run_fit
 
     try:
-        result = run_fit(stack_file, record, vary, cfc=cfc, align=align, overrides=overrides)
+        with progress(f"fitting {stack_file.name} to {measured.name}"):
+            result = run_fit(stack_file, record, vary, cfc=cfc, align=align, overrides=overrides)
     except SolverError as exc:
         typer.echo(f"hertz-chain: {Status.FAILED.text}: {_one_line(exc)}", err=True)
         raise typer.Exit(code=Status.FAILED.exit_code)

@@ -201,3 +201,18 @@ def test_design_takes_units_and_writes_a_stack_file_that_simulates(tmp_path):
         res = runner.invoke(app, ["design", "-R", "0.012", "-e", "0.8", *args] if "--bottom-mass" not in args
                             else ["design", "--top-mass", "1 kg", "-e", "0.8", *args])
         assert res.exit_code == 2 and needle in res.output and len(res.output.strip().splitlines()) == 1, res.output
+
+
+def test_progress_lines_only_when_asked_off_a_terminal(monkeypatch):
+    """Off a terminal nothing is printed unless HERTZ_CHAIN_PROGRESS=1 (then one line at the start of the
+    wait and one at the end); the results on stdout are the same either way."""
+    monkeypatch.setenv("HERTZ_CHAIN_PROGRESS_DELAY", "0")
+    monkeypatch.delenv("HERTZ_CHAIN_PROGRESS", raising=False)
+    quiet = runner.invoke(app, ["simulate", str(NORMATIVE), "--json"])
+    assert quiet.exit_code == 0 and "hertz-chain: simulating" not in quiet.stderr
+    monkeypatch.setenv("HERTZ_CHAIN_PROGRESS", "1")
+    loud = runner.invoke(app, ["simulate", str(NORMATIVE), "--json"])
+    assert loud.exit_code == 0, loud.output
+    lines = [ln for ln in loud.stderr.splitlines() if ln.startswith("hertz-chain: simulating")]
+    assert len(lines) == 2 and "compiles" in lines[0] and "done in" in lines[1]
+    assert json.loads(loud.stdout)["top_velocity_gain"] == json.loads(quiet.stdout)["top_velocity_gain"]
