@@ -198,6 +198,10 @@ def summary_table(report: Report, title: str | None = None) -> str:
         e_eff = float(r.restitution[j]) if j >= first else None
         right = f"{label:<10} {_fmt(e_nom, '.4f'):>9}  {_fmt(e_eff, '.4f'):>7}  {count:>4}" if j >= first else ""
         lines.append(f"{i + 1:>4}  {_fmt(float(gain), '.4f'):>7}  | {right}")
+    lines.append("  gain: the mass's launch velocity (when its last push of the first cascade ended; upward > 0) over "
+                 "the drop speed")
+    lines.append("  e_eff: separation over approach speed of the interface's main contact; episodes: its contacts "
+                 "in the first cascade")
     lines.append("")
     top = r.top_pulse
     if top is not None:
