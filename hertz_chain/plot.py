@@ -30,8 +30,8 @@ def report_figure(report: Report):
     ax.legend(fontsize="small", ncol=2)
     ax = axes[0, 1]
     for j in range(0 if report.ground else 1, n):
-        ax.plot(t_ms, st.forces[:, j], label="ground–1" if j == 0 else f"{j}–{j + 1}")
-    ax.set(xlabel="time (ms)", ylabel="contact force (N)", title="Contact forces")
+        ax.plot(t_ms, st.forces[:, j] / 1e3, label="ground–1" if j == 0 else f"{j}–{j + 1}")
+    ax.set(xlabel="time (ms)", ylabel="contact force (kN)", title="Contact forces")
     ax.legend(fontsize="small", ncol=2)
     ax = axes[1, 0]
     a_g = (st.accelerations[:, -1] + float(report.solution.stack.gravity)) / G0
@@ -49,19 +49,24 @@ def report_figure(report: Report):
     ax = axes[1, 1]
     srs = report.top_srs
     if srs is not None:
-        ax.loglog(srs.frequencies_Hz, srs.maximax, label="maximax")
+        ax.loglog(srs.frequencies_Hz, srs.maximax, label={"abs": "maximax", "pos": "positive", "neg": "negative"}.get(
+            getattr(srs, "peak", "abs"), "maximax"))
         ax.loglog(srs.frequencies_Hz, srs.primary, "--", label="primary")
         ax.loglog(srs.frequencies_Hz, np.maximum(srs.residual, 1e-300), ":", label="residual")
         ax.legend(fontsize="small")
-        ax.set_title(f"SRS of the top pulse (Q = {srs.Q:g}, 1/12 octave)")
-    ax.set(xlabel="natural frequency (Hz)", ylabel="peak absolute acceleration (g)")
+        ax.set_title(f"SRS of the top pulse (Q = {srs.Q:g})")
+    pv = srs is not None and getattr(srs, "kind", "acceleration") == "pseudo-velocity"
+    ax.set(xlabel="natural frequency (Hz)",
+           ylabel="pseudo-velocity (m/s)" if pv else "peak absolute acceleration (g)")
     # the primary cascade: up to a little after the top mass's last contact
     top_eps = [ep for ep in report.episodes if ep.interface == n - 1]
     if top_eps:
         t_end = 1e3 * max(ep.end for ep in top_eps) * 1.15
         for ax in axes[0]:
             ax.set_xlim(0.0, t_end)
-    fig.suptitle(f"Gain {report.top_velocity_gain:.4f} (rigid Eq 19: "
+    for a in axes.flat:
+        a.grid(True, which="both" if a.get_xscale() == "log" else "major", alpha=0.4)
+    fig.suptitle(f"Top launch gain {report.top_velocity_gain:.4f} (rigid theory: "
                  f"{'—' if report.rigid.nominal_gain is None else format(report.rigid.nominal_gain, '.4f')}), "
                  f"regime: {report.regime}")
     return fig
