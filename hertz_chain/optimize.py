@@ -47,7 +47,7 @@ import numpy as np
 
 from .errors import StackFileError
 from .keys import KEYS, Slot, check_values, dimension, read_bounds, read_entry, resolve
-from .stackfile import StackSpec, parse_quantity, parse_stack
+from .stackfile import StackSpec, parse_quantity, parse_srs_table, parse_stack
 from .status import Status
 
 __all__ = ["OptimizeStatus", "OptimizeSpec", "VarySpec", "OptimizeResult", "optimize", "read_optimize_file",
@@ -149,25 +149,7 @@ def _positive(raw, key, dim) -> float:
 
 def _parse_srs(raw: dict) -> dict:
     """`target_srs` (rows `[frequency, level]`: Hz and g, or quantities), `srs_tolerance_db`, `srs_q`."""
-    table = raw.get("target_srs")
-    where = "optimize.target_srs"
-    if not isinstance(table, list) or len(table) < 2:
-        raise _err(where, "missing or too short; give rows [frequency, level], e.g. [[100, 50], [\"1 kHz\", 1500]] "
-                   "(Hz and g), at least two")
-    rows = []
-    for i, row in enumerate(table):
-        if not isinstance(row, list) or len(row) != 2:
-            raise _err(f"{where}[{i}]", f"{row!r} is invalid: a row [frequency, level]")
-        f = parse_quantity(row[0], "frequency", f"{where}[{i}][0]") if isinstance(row[0], str) else row[0]
-        if isinstance(f, bool) or not isinstance(f, (int, float)) or not (math.isfinite(f) and 1e-3 <= f <= 1e6):
-            raise _err(f"{where}[{i}][0]", f"{row[0]!r} is invalid: a frequency in Hz, 1e-3 to 1e6")
-        a = row[1]
-        if isinstance(a, bool) or not isinstance(a, (int, float)) or not (math.isfinite(a) and 0 < a <= 1e8):
-            raise _err(f"{where}[{i}][1]", f"{row[1]!r} is invalid: a level in g, > 0")
-        rows.append((float(f), float(a)))
-    freqs = [r[0] for r in rows]
-    if any(b <= a for a, b in zip(freqs, freqs[1:])):
-        raise _err(where, "the frequencies must increase from row to row")
+    rows = parse_srs_table(raw.get("target_srs"), "optimize.target_srs")
     out = {"target_srs": tuple(rows)}
     if "srs_tolerance_db" in raw:
         out["srs_tolerance_db"] = _positive(raw["srs_tolerance_db"], "optimize.srs_tolerance_db", "dimensionless")

@@ -213,7 +213,11 @@ def plot_check(result, path: str | Path) -> None:
     if a_g[np.argmax(np.abs(a_g))] < 0:
         a_g = -a_g
     nom = nominal_pulse(spec.shape, spec.peak_g, spec.duration, result.t - result.nominal_start)
-    fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
+    if spec.srs is not None:
+        fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 5), constrained_layout=True)
+        _check_srs_panel(bx, result)
+    else:
+        fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
     if spec.band is not None:
         lo, hi = band_limits(spec, result.t - result.nominal_start)
         ax.fill_between(t, lo, hi, color="0.85", label=f"band ±{spec.band:g} A")
@@ -228,6 +232,28 @@ def plot_check(result, path: str | Path) -> None:
     ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.savefig(path, dpi=120, format="png")
     plt.close(fig)
+
+
+def _check_srs_panel(bx, result) -> None:
+    """The checked record's SRS against the required one and its dB limits (`plot_check`)."""
+    import warnings
+
+    from .srs import octave_frequencies, srs
+
+    spec = result.spec
+    f_t, a_t = (np.array(c) for c in zip(*spec.srs))
+    f = octave_frequencies(f_t[0], f_t[-1], 12)
+    req = np.exp(np.interp(np.log(f), np.log(f_t), np.log(a_t)))
+    a = result.a / G0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        got = srs(result.t, a if a[np.argmax(np.abs(a))] > 0 else -a, f, Q=spec.srs_q, on_coarse="ignore").maximax
+    curves = [(got, "top pulse (model)", "C3", "-"), (req, "required", "k", "--")]
+    if spec.srs_tolerance_db is not None:
+        lo, hi = spec.srs_tolerance_db
+        curves += [(req * 10 ** (lo / 20), f"{lo:+g} dB", "0.5", ":"), (req * 10 ** (hi / 20), f"{hi:+g} dB", "0.5", ":")]
+    _srs_panel(bx, f, curves)
+    bx.set_ylabel(f"maximax SRS (g), Q = {spec.srs_q:g}")
 
 
 def plot_fit(result, path: str | Path) -> None:

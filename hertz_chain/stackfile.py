@@ -30,6 +30,7 @@ from .registry import LAWS
 from .registry import SOLVERS as _SOLVER_ROWS
 
 __all__ = [
+    "parse_srs_table",
     "STANDARD_GRAVITY",
     "MAX_MASSES",
     "MAX_STEPS",
@@ -1064,6 +1065,30 @@ def _parse_solver(raw: Any) -> SolverSpec:
     if until == "t_max" and t_max is None:
         raise _error("solver.until", "'t_max' needs solver.t_max (the time to run to)")
     return SolverSpec(solver, rtol, atol, t_max, max_steps, n_output, dt_output, until)
+
+
+def parse_srs_table(table: Any, where: str) -> tuple[tuple[float, float], ...]:
+    """An SRS given as a table: rows `[frequency, level]` (Hz or a quantity such as `"1 kHz"`; g as a
+    plain number), at least two, frequencies increasing. Used by `[optimize] target_srs` and
+    `[test] srs`. Raises `StackFileError` naming `where` and the row."""
+    if not isinstance(table, list) or len(table) < 2:
+        raise _error(where, "missing or too short; give rows [frequency, level], e.g. [[100, 50], [\"1 kHz\", 1500]] "
+                     "(Hz and g), at least two")
+    rows = []
+    for i, row in enumerate(table):
+        if not isinstance(row, list) or len(row) != 2:
+            raise _error(f"{where}[{i}]", f"{row!r} is invalid: a row [frequency, level]")
+        f = parse_quantity(row[0], "frequency", f"{where}[{i}][0]") if isinstance(row[0], str) else row[0]
+        if isinstance(f, bool) or not isinstance(f, (int, float)) or not (math.isfinite(f) and 1e-3 <= f <= 1e6):
+            raise _error(f"{where}[{i}][0]", f"{row[0]!r} is invalid: a frequency in Hz, 1e-3 to 1e6")
+        a = row[1]
+        if isinstance(a, bool) or not isinstance(a, (int, float)) or not (math.isfinite(a) and 0 < a <= 1e8):
+            raise _error(f"{where}[{i}][1]", f"{row[1]!r} is invalid: a level in g, > 0")
+        rows.append((float(f), float(a)))
+    freqs = [r[0] for r in rows]
+    if any(b <= a for a, b in zip(freqs, freqs[1:])):
+        raise _error(where, "the frequencies must increase from row to row")
+    return tuple(rows)
 
 
 def _parse_srs(raw: Any) -> SRSSpec:

@@ -24,6 +24,11 @@ against the nominal pulse ± `band`·A over the nominal pulse's support joined w
 the nominal pulse placed where the smallest margin is largest. Each criterion reports its value, the
 allowed range and the margin (the distance to the nearer limit, in the criterion's unit, negative when
 it fails). Without a tolerance a criterion is reported, not judged (`passed` None).
+
+**The SRS criterion** (`[test] srs`, a table of `[frequency, level]` rows in Hz and g, with
+`srs_tolerance_db` and `srs_q`): the maximax absolute-acceleration SRS of the checked record at 1/12
+octave across the table (and at its rows), against the table interpolated log-log; the criterion's
+value is the deviation (dB) at the worst point and its margin the distance to the nearer limit there.
 """
 
 from __future__ import annotations
@@ -226,6 +231,9 @@ class TestSpec:
     band: float | None = None
     source: str = ""
     fall_time: float | None = None
+    srs: tuple[tuple[float, float], ...] | None = None  # required SRS: rows (Hz, g)
+    srs_tolerance_db: tuple[float, float] | None = None  # (below, above) in dB
+    srs_q: float = 10.0
 
     def __post_init__(self):
         if self.fall_time is None and self.shape == "sawtooth":
@@ -305,8 +313,8 @@ class CheckResult:
             rng = "not judged (no tolerance)" if c.passed is None else f"allowed [{c.low:.5g}, {c.high:.5g}]"
             verdict = "" if c.passed is None else ("PASS" if c.passed else "FAIL")
             margin = "" if c.margin is None else f" margin {c.margin:+.4g} {c.unit}"
-            nominal = "" if c.name == "band" else f" (nominal {c.nominal:.5g})"
-            what = "largest excursion" if c.name == "band" else ""
+            nominal = "" if c.name in ("band", "SRS") else f" (nominal {c.nominal:.5g})"
+            what = {"band": "largest excursion", "SRS": "deviation"}.get(c.name, "")
             out.append(f"  {c.name:<16} {what + ' ' if what else ''}{c.value:.5g} {c.unit}{nominal} {rng}{margin} "
                        f"{verdict}".rstrip())
         out.append(f"result: {self.verdict}" + (" (no tolerance given: add test.peak_tolerance, "
@@ -380,6 +388,10 @@ def check_pulse(t, a, spec: TestSpec) -> CheckResult:
             notes.append(f"the band lets the sawtooth fall from its peak to zero within {spec.fall_time * 1e3:.4g} ms "
                          f"after D (test.fall_time; default {DEFAULT_FALL:g} D, hertz_chain's allowance, not a "
                          "number of the standard)")
+    if spec.srs is not None:
+        c, note = srs_criterion(t, pm.sign * a, spec)
+        crit.append(c)
+        notes.append(note)
     if pm.truncated:
         notes.append("the record cuts the pulse: its duration and velocity change are measured to the record's end")
     return CheckResult(spec, tuple(crit), float(start), tuple(notes), t, a)
@@ -388,7 +400,7 @@ def check_pulse(t, a, spec: TestSpec) -> CheckResult:
 # ------------------------------------------------------------------------------------------ files
 #: Keys of a stack file's `[test]` section.
 TEST_KEYS = ("standard", "shape", "peak_g", "duration", "peak_tolerance", "duration_tolerance",
-             "velocity_tolerance", "band", "fall_time")
+             "velocity_tolerance", "band", "fall_time", "srs", "srs_tolerance_db", "srs_q")
 
 
 def _tolerance(raw, key: str) -> tuple[float, float]:
@@ -404,6 +416,51 @@ def _tolerance(raw, key: str) -> tuple[float, float]:
     if not (-100 < lo <= 0 <= hi):
         raise StackFileError(f"test.{key}: {raw!r} is invalid: [below, above] with -100 < below <= 0 <= above (percent)")
     return (lo, hi)
+
+
+def _db_tolerance(raw) -> tuple[float, float]:
+    """`6` (meaning ±6 dB) or `[-3, 6]` (dB below and above the required SRS)."""
+    from .errors import StackFileError
+
+    vals = raw if isinstance(raw, list) else [raw]
+    if (not 1 <= len(vals) <= 2 or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in vals)
+            or not all(math.isfinite(v) for v in vals)):
+        raise StackFileError(f"test.srs_tolerance_db: {raw!r} is invalid: decibels (6 = ±6 dB) or [below, above], "
+                             "e.g. [-3, 6]")
+    lo, hi = (-abs(vals[0]), abs(vals[0])) if len(vals) == 1 else (float(vals[0]), float(vals[1]))
+    if not (lo <= 0 <= hi and hi - lo > 0):
+        raise StackFileError(f"test.srs_tolerance_db: {raw!r} is invalid: [below, above] with below <= 0 <= above")
+    return (lo, hi)
+
+
+def srs_criterion(t, a, spec: TestSpec) -> tuple[Criterion, str]:
+    """The SRS of the record `(t, a)` (maximax absolute acceleration, Q = `spec.srs_q`) against the
+    required SRS `spec.srs` (log-log between its rows, at 1/12 octave from its first to its last
+    frequency): the criterion (value: the deviation in dB farthest from the allowed range's middle;
+    margin: the smallest distance to a limit, dB) and a note naming the worst frequency."""
+    import warnings
+
+    from .srs import octave_frequencies, srs
+
+    f_t, a_t = (np.array(c) for c in zip(*spec.srs))
+    f = octave_frequencies(f_t[0], f_t[-1] * (1 + 1e-12), 12)
+    f = f[(f >= f_t[0] * (1 - 1e-12)) & (f <= f_t[-1] * (1 + 1e-12))]
+    f = np.unique(np.concatenate([f, f_t]))
+    req = np.exp(np.interp(np.log(f), np.log(f_t), np.log(a_t)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        got = srs(np.asarray(t, dtype=float), np.asarray(a, dtype=float) / G0, f, Q=spec.srs_q,
+                  on_coarse="ignore").maximax
+    dev = 20.0 * np.log10(np.maximum(got, 1e-300) / req)
+    if spec.srs_tolerance_db is None:
+        k = int(np.argmax(np.abs(dev)))
+        return (Criterion("SRS", "dB", float(dev[k]), 0.0, None, None, None, None),
+                f"SRS: largest deviation {dev[k]:+.2f} dB at {f[k]:.5g} Hz (Q = {spec.srs_q:g})")
+    lo, hi = spec.srs_tolerance_db
+    margins = np.minimum(dev - lo, hi - dev)
+    k = int(np.argmin(margins))
+    return (Criterion("SRS", "dB", float(dev[k]), 0.0, float(lo), float(hi), float(margins[k]), bool(margins[k] >= 0)),
+            f"SRS: worst point {dev[k]:+.2f} dB at {f[k]:.5g} Hz (Q = {spec.srs_q:g}, allowed [{lo:+g}, {hi:+g}] dB)")
 
 
 def parse_test(raw, standard: str | None = None) -> TestSpec:
@@ -451,6 +508,20 @@ def parse_test(raw, standard: str | None = None) -> TestSpec:
             raise StackFileError(f"test.fall_time: {raw['fall_time']!r} is invalid: a duration > 0, e.g. \"0.1 ms\" "
                                  "(the terminal-peak sawtooth's fall allowance in the band)")
         over["fall_time"] = f
+    if "srs" in raw:
+        from .stackfile import parse_srs_table
+
+        over["srs"] = parse_srs_table(raw["srs"], "test.srs")
+    for key in ("srs_tolerance_db", "srs_q"):
+        if key in raw and "srs" not in raw:
+            raise StackFileError(f"test.{key}: used only with test.srs (the required SRS table)")
+    if "srs_tolerance_db" in raw:
+        over["srs_tolerance_db"] = _db_tolerance(raw["srs_tolerance_db"])
+    if "srs_q" in raw:
+        q = raw["srs_q"]
+        if isinstance(q, bool) or not isinstance(q, (int, float)) or not (math.isfinite(q) and 0.5 < q <= 1000):
+            raise StackFileError(f"test.srs_q: {q!r} is invalid: Q between 0.5 and 1000 (e.g. 10)")
+        over["srs_q"] = float(q)
     if name is not None:
         if not isinstance(name, str):
             raise StackFileError(f"test.standard: {name!r} is invalid: a condition name, e.g. \"JESD22-B110 B\"")

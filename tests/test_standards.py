@@ -203,3 +203,43 @@ def test_cli_check_fails_with_exit_1_and_bad_input_with_2(tmp_path):
     assert res.exit_code == 2 and "standard" in res.output
     res = runner.invoke(app, ["check", "examples/mvg6_gapped.toml"])
     assert res.exit_code == 2 and "test: missing" in res.output
+
+
+def _pyyeti_table(t, a_g, freqs, q=10.0, scale_db=0.0):
+    from pyyeti import srs as pyyeti_srs
+
+    sr = 1.0 / (t[1] - t[0])
+    got = pyyeti_srs.srs(a_g, sr, freqs, q, ic="zero", stype="absacce", peak="abs", time="total", rolloff="none",
+                         parallel="no")
+    return [[float(f), float(v) * 10 ** (scale_db / 20)] for f, v in zip(freqs, np.ravel(got))]
+
+
+def test_srs_criterion_against_pyyeti():
+    """The required SRS is pyyeti's SRS of the same half-sine (an independent implementation; BSD-3)
+    raised by 3 dB, 1/12 octave rows from 100 Hz to 10 kHz: the record sits 3 dB below it (to the
+    interpolation between rows, < 0.1 dB), so ±6 dB passes with a margin of 3 dB and ±2 dB fails by 1 dB."""
+    t, a = half_sine_record()
+    freqs = 1000.0 * 2.0 ** (np.arange(-40, 41) / 12)  # 99.2 Hz .. 10.08 kHz
+    table = _pyyeti_table(t, a / G0, freqs, scale_db=3.0)
+    s = parse_test({"shape": "half-sine", "peak_g": 1500, "duration": "0.5 ms", "srs": table,
+                    "srs_tolerance_db": 6})
+    r = check_pulse(t, a, s)
+    c = next(c for c in r.criteria if c.name == "SRS")
+    assert c.passed and c.margin == pytest.approx(3.0, abs=0.1) and c.value == pytest.approx(-3.0, abs=0.1)
+    r = check_pulse(t, a, dataclasses.replace(s, srs_tolerance_db=(-2.0, 2.0)))
+    c = next(c for c in r.criteria if c.name == "SRS")
+    assert not c.passed and c.margin == pytest.approx(-1.0, abs=0.1) and not r.passed
+
+
+@pytest.mark.parametrize("raw, key", [
+    ({"srs": [[100, 10]]}, "test.srs"),
+    ({"srs": [[100, 10], [50, 20]]}, "test.srs"),
+    ({"srs": [[100, 10], ["1 kHz", -1]]}, "test.srs[1][1]"),
+    ({"srs_tolerance_db": 3}, "used only with test.srs"),
+    ({"srs": [[100, 10], [1000, 20]], "srs_tolerance_db": [3, 6]}, "test.srs_tolerance_db"),
+    ({"srs": [[100, 10], [1000, 20]], "srs_q": 0.1}, "test.srs_q"),
+])
+def test_bad_srs_requirements(raw, key):
+    with pytest.raises(StackFileError) as err:
+        parse_test({"shape": "half-sine", "peak_g": 100, "duration": "1 ms", **raw})
+    assert key in str(err.value) and "\n" not in str(err.value)
