@@ -4,7 +4,7 @@ Every cache user asks `cache_dir(kind)` for its folder:
 
 * `cache_dir("jax")`: JAX's persistent compilation cache (`_config`), with `_export`'s traced
   functions in its `export/` subfolder;
-* `cache_dir("pint")`: pint's parsed unit definitions (`stackfile`).
+* `cache_dir("pint")`: pint's parsed unit definitions (`units`).
 
 The root is ``HERTZ_CHAIN_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/hertz_chain``, else
 ``~/.cache/hertz_chain``; ``HERTZ_CHAIN_NO_CACHE`` (any non-empty value) turns every cache off, and then

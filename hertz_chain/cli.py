@@ -107,7 +107,8 @@ def _check_design_inputs(ratio, bottom_mass, top_mass, restitution) -> None:
     import math
 
     from .constants import MAX_MASSES
-    from .stackfile import LIMITS, MIN_RESTITUTION
+    from .stackfile import MIN_RESTITUTION
+    from .units import LIMITS
 
     lo, hi = LIMITS["mass"]
     _check_number(restitution, "--restitution", MIN_RESTITUTION, 1.0,
@@ -182,7 +183,7 @@ def design(
 
 def _mass_option(raw: str | None, flag: str) -> float | None:
     """A mass option: `"8 kg"`, `"100 g"`, or a plain number of kg."""
-    from .stackfile import parse_quantity
+    from .units import parse_quantity
 
     if raw is None:
         return None
@@ -197,7 +198,8 @@ def _design_document(kind, stiffness, law, impact_velocity, gap, e, write, force
     be (one line naming the option on error), before anything is designed."""
     from . import _paths
     from .registry import LAWS
-    from .stackfile import parse_quantity, parse_stack
+    from .stackfile import parse_stack
+    from .units import parse_quantity
 
     _paths.check_output_path(write, "--write", (".toml",), force)
     if kind not in ("mvg", "met"):

@@ -152,7 +152,7 @@ def dimension(spec, key: str, index: object) -> str:
 
 def read_bounds(raw: object, dim: str, where: str) -> tuple[float, float]:
     """`[lower, upper]` with units -> SI floats, lower < upper. Raises `StackFileError`."""
-    from .stackfile import parse_quantity
+    from .units import parse_quantity
 
     if raw is None:
         raise StackFileError(f"{where}: missing; give [lower, upper] with units")

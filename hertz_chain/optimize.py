@@ -47,7 +47,8 @@ import numpy as np
 
 from .errors import StackFileError
 from .keys import KEYS, Slot, check_values, dimension, read_bounds, read_entry, resolve
-from .stackfile import StackSpec, parse_quantity, parse_srs_table, parse_stack
+from .stackfile import StackSpec, parse_srs_table, parse_stack
+from .units import parse_quantity
 from .status import Status
 
 __all__ = ["OptimizeStatus", "OptimizeSpec", "VarySpec", "OptimizeResult", "optimize", "read_optimize_file",

@@ -471,7 +471,7 @@ def parse_test(raw, standard: str | None = None) -> TestSpec:
     **Raises:** `StackFileError` (`test.KEY: ...`) or `ParameterError` (an unknown standard).
     """
     from .errors import StackFileError
-    from .stackfile import parse_quantity
+    from .units import parse_quantity
 
     raw = dict(raw or {})
     unknown = sorted(set(raw) - set(TEST_KEYS))

@@ -39,7 +39,8 @@ import numpy as np
 
 from .errors import StackFileError
 from .keys import Slot, check_values, dimension, read_bounds, read_entry, resolve, valid_values
-from .stackfile import StackSpec, load_stack_file, parse_quantity
+from .stackfile import StackSpec, load_stack_file
+from .units import parse_quantity
 
 __all__ = ["SweepSpec", "AxisSpec", "SweepResult", "read_sweep_file", "check", "sweep", "COMBINE", "SAMPLES"]
 

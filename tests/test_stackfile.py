@@ -627,7 +627,7 @@ def test_masses_round_trip_to_kilograms(value, unit):
 
 
 def test_parse_quantity_accepts_pint_quantities_and_bare_numbers():
-    from hertz_chain.stackfile import _ureg
+    from hertz_chain.units import _ureg
 
     q = _ureg().Quantity(3.0, "mm")
     assert close(parse_quantity(q, "length"), 3e-3)
