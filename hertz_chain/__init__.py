@@ -96,6 +96,7 @@ _EXPORTS = {
     "UnrolledTsit5": "simulate",
     "launch_velocity": "simulate",
     "restitution": "simulate",
+    "simulate_impact": "simulate",
     "simulate": "simulate",
     "simulate_batch": "simulate",
     "ShockResponseSpectrum": "srs",
@@ -212,6 +213,7 @@ if TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
         UnrolledTsit5,
         launch_velocity,
         restitution,
+        simulate_impact,
         simulate,
         simulate_batch,
     )

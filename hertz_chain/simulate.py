@@ -11,7 +11,8 @@ diffrax: `_solver` (options, the unrolled Tsit5, `make_solver`), `_scaling` (uni
   compiled, vmapped solve; a failing design is flagged in its own `status`, never aborting the batch.
 - `launch_velocity(stack, state, ...) -> Array` — the launch velocity of every mass as a JAX function,
   for `jax.grad` / `jax.jacfwd` with respect to masses, gaps and contact parameters.
-- `restitution(law, impact_velocity, effective_mass) -> Restitution` — one contact, measured.
+- `simulate_impact(law, impact_velocity, effective_mass) -> Restitution` — one contact, simulated and measured
+  (`restitution`: its deprecated old name).
 
 **Scaling.** The solver integrates a dimensionless state: time in units of `T`, the Hertz contact time
 `t_c = 2.94328 delta_max / V` of the shortest contact; positions in units of `L = delta_max`, the peak
@@ -116,6 +117,7 @@ __all__ = [
     "simulate_batch",
     "launch_velocity",
     "restitution",
+    "simulate_impact",
 ]
 
 
@@ -387,7 +389,7 @@ def _peak(t, fn_of_state, d, dd, ddd, i):
     return float(best)
 
 
-def restitution(
+def simulate_impact(
     law: AbstractContactLaw,
     impact_velocity: float,
     effective_mass: float,
@@ -424,3 +426,13 @@ def restitution(
         max_overlap=d_max,
         max_force=f_max,
     )
+
+
+def restitution(*args, **kwargs) -> Restitution:
+    """Deprecated name of :func:`simulate_impact` (it simulates; the name now says so). Warns with a
+    `DeprecationWarning`; the same arguments and result."""
+    import warnings
+
+    warnings.warn("hertz_chain.restitution is renamed simulate_impact (it runs a simulation); the old name "
+                  "will be removed", DeprecationWarning, stacklevel=2)
+    return simulate_impact(*args, **kwargs)

@@ -88,7 +88,7 @@ print(f"Hertz contact time at 1 m/s: {TC_HERTZ * 1e3:.4f} ms; k_lin = {K_LIN:.4e
 
 # %%
 vs = np.geomspace(0.1, 10.0, 3 if QUICK else 13)
-e_sim = {name: np.array([hc.restitution(law, v, M, tolerances=TOL).e for v in vs]) for name, law in laws.items()}
+e_sim = {name: np.array([hc.simulate_impact(law, v, M, tolerances=TOL).e for v in vs]) for name, law in laws.items()}
 hc_alpha = float(laws["hunt-crossley"].alpha)
 visco = laws["viscoelastic"]
 xi = 1.5 * float(visco.A) * (K / M) ** 0.4 * vs**0.2
@@ -184,7 +184,7 @@ for name in hc.CHI_MAPS:
         e_map = table[name][tgt]
         e_check = float("nan")
         if tgt in (0.5, 0.9):  # simulate the impact with this chi (alpha = chi / v at v = 1 m/s)
-            e_check = hc.restitution(hc.HuntCrossley(K, chi / VC), VC, M, tolerances=TOL).e
+            e_check = hc.simulate_impact(hc.HuntCrossley(K, chi / VC), VC, M, tolerances=TOL).e
             sim_dev = max(sim_dev, abs(e_check - e_map))
         rows_chi.append((name, tgt, chi, e_map, e_map - tgt, published.get((name, tgt), float("nan")), e_check))
 assert sim_dev < 1e-7
@@ -221,7 +221,7 @@ show(fig, "contact_chi_maps")
 # event (`simulate.py`, `_cascade_complete`: "no contact pushes", `f <= 0`) and its end-of-contact search
 # (`_end_of_contacts`, `active = f > 0`; `Stack.separation_function`) end the contact where the force
 # first reaches zero, but an unclamped contact goes on pulling (`F < 0`) until `δ = 0`. So
-# `restitution(Tsuji(..., clamp=False))` returns the *clamped* value (0.8081 instead of 0.8000 for the
+# `simulate_impact(Tsuji(..., clamp=False))` returns the *clamped* value (0.8081 instead of 0.8000 for the
 # target 0.8). The unclamped numbers below therefore come from `calibration`, not from the simulator.
 
 # %%
@@ -229,14 +229,14 @@ clamp_rows = []
 for tgt, expect in ((0.8, 0.808), (0.5, 0.550)):
     eta_free = -np.sqrt(5) * np.log(tgt) / np.sqrt(np.pi**2 + np.log(tgt) ** 2)
     assert np.isclose(calibration.tsuji_eta(tgt, clamp=False), eta_free, rtol=1e-14)
-    e_clamped = hc.restitution(hc.Tsuji(K, eta_free, M, clamp=True), VC, M, tolerances=TOL).e
+    e_clamped = hc.simulate_impact(hc.Tsuji(K, eta_free, M, clamp=True), VC, M, tolerances=TOL).e
     e_free = calibration.tsuji_restitution(eta_free, clamp=False)  # scipy (see the note above)
     assert abs(e_clamped - expect) < 5e-4 and abs(e_free - tgt) < 1e-9
     clamp_rows.append(("tsuji", tgt, eta_free, e_clamped, e_free, calibration.tsuji_eta(tgt)))
 for tgt, expect in ((0.1, 0.253), (0.5, 0.550), (0.9, 0.902)):
     zeta_free = -np.log(tgt) / np.sqrt(np.pi**2 + np.log(tgt) ** 2)
     c = 2 * zeta_free * np.sqrt(M * K_LIN)
-    e_clamped = hc.restitution(hc.KelvinVoigt(K_LIN, c, clamp=True), VC, M, tolerances=TOL).e
+    e_clamped = hc.simulate_impact(hc.KelvinVoigt(K_LIN, c, clamp=True), VC, M, tolerances=TOL).e
     e_free = calibration.kelvin_voigt_restitution(zeta_free, clamp=False)
     assert abs(e_clamped - expect) < 5e-4 and abs(e_free - tgt) < 1e-9
     clamp_rows.append(("kelvin-voigt", tgt, zeta_free, e_clamped, e_free, calibration.kelvin_voigt_damping_ratio(tgt)))
@@ -262,7 +262,7 @@ assert np.isclose(calibration.tsuji_eta(0.8) / np.sqrt(5), calibration.kelvin_vo
 
 # %%
 closed = calibration.hertz_impact(M, K, VC)
-res_h = hc.restitution(laws["hertz"], VC, M, tolerances=TOL)
+res_h = hc.simulate_impact(laws["hertz"], VC, M, tolerances=TOL)
 for key, val in (("contact_time", res_h.contact_time), ("max_overlap", res_h.max_overlap), ("max_force", res_h.max_force)):
     assert np.isclose(val, closed[key], rtol=1e-6), key  # Hertz closed form (Johnson 1985)
 assert np.isclose(closed["contact_time"], TC_HERTZ, rtol=1e-5)
@@ -275,7 +275,7 @@ for i, (name, law) in enumerate(laws.items()):
     st = sol.steps
     f = st.forces[:, 0]
     pm = hc.pulse_metrics(st.t, st.accelerations[:, 0], velocity=st.velocities[:, 0])
-    res = hc.restitution(law, VC, M, tolerances=TOL)
+    res = hc.simulate_impact(law, VC, M, tolerances=TOL)
     assert np.isclose(pm.delta_v, (1 + res.e) * VC, rtol=1e-9)  # momentum: Delta V = (1 + e) v
     onset = float(law.force(np.asarray(1e-12), np.asarray(VC)))  # force just after first touch
     rows_pulse.append((name, res.e, res.contact_time, res.max_force, res.max_force / M / hc.G0,

@@ -79,7 +79,7 @@ def test_overlap_rates_follow_the_interface_convention():
 
 def test_one_contact_end_everywhere_clamped_tsuji():
     # Issue 16: a contact ends where its force returns to zero, for the simulator's launch (and so
-    # `restitution()`), the episodes of the analysis, and the rigid comparison alike. Reference: an
+    # `simulate_impact()`), the episodes of the analysis, and the rigid comparison alike. Reference: an
     # independent scipy integration (Radau, rtol 1e-12) of the same single impact, m = 1 kg on the ground,
     # g = 0, F = k d^1.5 + eta sqrt(m k) d^0.25 d' clamped at F >= 0 (Tsuji, Tanaka & Ishida 1992),
     # with a terminal event at F = 0 after the peak. For e = 0.5 the force returns to zero while
@@ -110,7 +110,7 @@ def test_one_contact_end_everywhere_clamped_tsuji():
     d_end_ref = float(ref.y_events[0][0][0])
     assert d_end_ref > 0  # the clamped contact lets go before the overlap closes
 
-    measured = hc.restitution(law, v0, m)
+    measured = hc.simulate_impact(law, v0, m)
     assert measured.contact_time == pytest.approx(t_end_ref, rel=1e-7)
     assert measured.e == pytest.approx(v_end_ref / v0, rel=1e-7)
     stack = hc.Stack([m], [law], gravity=0.0)

@@ -2,7 +2,7 @@
 
 Adding a contact law, a chi map or a solver is one row there (and, for a law, one class); these tests
 pick it up without an edit. References: the restitution a law is calibrated to (paper Eq 2, measured by
-an independent single-impact simulation, `hc.restitution`), each published chi map's own formula, and
+an independent single-impact simulation, `hc.simulate_impact`), each published chi map's own formula, and
 the elastic two-mass exchange of the paper's Eqs 1-2 with e = 1 (`rigid_events.simulate_rigid`).
 """
 

@@ -10,7 +10,7 @@ from scipy.special import beta
 import hertz_chain as hc
 from hertz_chain.contact import Hertz, HuntCrossley, KelvinVoigt, Tsuji
 from hertz_chain.errors import ParameterError
-from hertz_chain.simulate import Tolerances, restitution, simulate
+from hertz_chain.simulate import Tolerances, simulate, simulate_impact
 from hertz_chain.stack import Stack, State, at_impact, resting
 from hertz_chain.status import Status
 
@@ -23,7 +23,7 @@ def test_single_hertz_impact_closed_forms():
     # Reference: Hertz (1882) impact, Johnson "Contact Mechanics" §11.1: delta_max = (5 m v^2/(4k))^{2/5},
     # t_c = 2.9432752 delta_max / v, F_max = k delta_max^{3/2}, e = 1.
     m, k, v = 0.3, 2e9, 1.7
-    r = restitution(Hertz(k), v, m)
+    r = simulate_impact(Hertz(k), v, m)
     d_max = (5 * m * v**2 / (4 * k)) ** 0.4
     assert r.max_overlap == pytest.approx(d_max, rel=1e-7)
     assert r.contact_time == pytest.approx(HERTZ_TC * d_max / v, rel=1e-7)
@@ -39,15 +39,15 @@ def test_unclamped_contact_ends_when_overlap_closes(e):
     # time with zeta = eta / sqrt(5) (docs/references.md: exact without the clamp).
     m, k, v = 0.2, 3e6, 1.3
     zeta = -np.log(e) / np.sqrt(np.pi**2 + np.log(e) ** 2)
-    kv = restitution(KelvinVoigt(k, 2 * zeta * np.sqrt(m * k), clamp=False), v, m)
+    kv = simulate_impact(KelvinVoigt(k, 2 * zeta * np.sqrt(m * k), clamp=False), v, m)
     assert kv.e == pytest.approx(np.exp(-zeta * np.pi / np.sqrt(1 - zeta**2)), abs=1e-8)
     assert kv.contact_time == pytest.approx(np.pi / (np.sqrt(k / m) * np.sqrt(1 - zeta**2)), rel=1e-8)
     eta = -np.sqrt(5) * np.log(e) / np.sqrt(np.pi**2 + np.log(e) ** 2)
-    ts = restitution(Tsuji(3e9, eta, m, clamp=False), v, m)
+    ts = simulate_impact(Tsuji(3e9, eta, m, clamp=False), v, m)
     assert ts.e == pytest.approx(e, abs=1e-7)
     # with the clamp the same eta dissipates less (docs/references.md: 0.808 for a 0.8 target)
     if e == 0.8:
-        assert restitution(Tsuji(3e9, eta, m), v, m).e == pytest.approx(0.808, abs=5e-4)
+        assert simulate_impact(Tsuji(3e9, eta, m), v, m).e == pytest.approx(0.808, abs=5e-4)
 
 
 def test_newtons_cradle_published_velocities_momentum_energy():
@@ -103,7 +103,7 @@ def test_rigid_limit_eq19_and_event_driven():
     e, up = [], None
     for j in range(n):
         u = v if j == 0 else up + v
-        ej = restitution(laws[j], u, mstar[j], tolerances=TIGHT).e
+        ej = simulate_impact(laws[j], u, mstar[j], tolerances=TIGHT).e
         e.append(ej)
         if j == 0:
             up = ej * v
@@ -195,7 +195,7 @@ def test_bad_options_raise_parameter_error():
     with pytest.raises(ParameterError):
         Tolerances(rtol=0.0)
     with pytest.raises(ParameterError):
-        restitution(Hertz(1e9), -1.0, 1.0)
+        simulate_impact(Hertz(1e9), -1.0, 1.0)
 
 
 def test_until_launch_ends_a_gapped_stack_without_gravity_once_the_top_is_final():
@@ -220,3 +220,9 @@ def test_until_launch_ends_a_gapped_stack_without_gravity_once_the_top_is_final(
     assert sol.launch_velocities[-1] == pytest.approx(eq19, rel=1e-8)
     v = hc.launch_velocity(stack, state, until="launch")
     assert float(v[-1]) == pytest.approx(eq19, rel=1e-8)
+
+
+def test_restitution_is_the_deprecated_name_of_simulate_impact():
+    with pytest.warns(DeprecationWarning, match="simulate_impact"):
+        old = hc.restitution(Hertz(1e9), 1.0, 0.1)
+    assert old == simulate_impact(Hertz(1e9), 1.0, 0.1)
