@@ -104,6 +104,10 @@ class BatchSolution:
 
     `status_code (B,)`, `ok (B,)`, `t_final`, `launch_velocities (B, n)`, ..., `steps`/`grid`
     (padded with NaN after each design's end; `steps` is None with `save_steps=False`). `design(i)` returns design `i` as a trimmed `Solution`.
+    Without a step history (`save_steps=False`) also `peak_forces (B, n)`: each interface's largest
+    contact force at the accepted points of the first cascade (N; low by O(h^2) of the step), and
+    `impact_velocities (B, n)`: the upper body's velocity at the last accepted point before the
+    interface's first contact (m/s, upward > 0); None with a step history (analyse a design instead).
     """
 
     status_code: np.ndarray
@@ -122,6 +126,8 @@ class BatchSolution:
     scales: Scales
     stack: Stack
     state: State
+    peak_forces: np.ndarray | None = None
+    impact_velocities: np.ndarray | None = None
 
     @property
     def ok(self) -> np.ndarray:

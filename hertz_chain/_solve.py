@@ -169,6 +169,7 @@ def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, full: bool 
         out["history"] = (sol.ys[0][:, :n3], sol.ts[0])
     else:
         out["energy_error"] = contacts.energy[1] / sc.energy
+        out["peak_forces"], out["impact_velocities"] = contacts.peaks[0], contacts.peaks[1]
     if ts is not None:
         grid = _derived(stack, sol.ys[int(cfg.save_steps)][:, :n3] * scale)
         grid["t"] = ts

@@ -135,7 +135,11 @@ class _Contacts(eqx.Module):
     scaled time `t_c`, whether the top mass has passed the apex of its flight after its last push (the
     top interface is then frozen: a later landing is a rebound) and its velocity at the latest point
     (scaled, to see it change sign), and the scaled velocities at `t_c`; `energy`: the
-    energy at `t0` and the largest `|E - E(t0)|` so far (J), when audited. Packed into few arrays: each
+    energy at `t0` and the largest `|E - E(t0)|` so far (J), when audited; `peaks (2, n)`, when audited:
+    each interface's largest contact force at the accepted points of the first cascade (N; the step-sampled
+    peak, low by O(h^2)) and the upper body's velocity (m/s) at the last accepted point before the
+    interface's first contact (its free-flight velocity just before impact), for the per-design pulse
+    of a batched solve without a step history (`hertz_chain.sweep`). Packed into few arrays: each
     array is a separate operation in every step of the loop.
     """
 
@@ -143,6 +147,7 @@ class _Contacts(eqx.Module):
     now: Array
     cascade: Array
     energy: tuple[Array, Array] | None
+    peaks: Array | None = None
 
     @staticmethod
     def update(c: _Contacts | None, t, ys, args, audit: bool, launch: bool = False) -> _Contacts:
@@ -159,7 +164,8 @@ class _Contacts(eqx.Module):
             cols = 7 if q is not None else 6
             c = _Contacts(jnp.broadcast_to(jnp.asarray([-1.0] + [0.0] * (cols - 1)), d.shape + (cols,)),
                           active & False, jnp.concatenate([jnp.zeros(4), v_top[None], ys[n : 2 * n]]),
-                          None if e is None else (e, 0.0 * e))
+                          None if e is None else (e, 0.0 * e),
+                          None if e is None else jnp.stack([0.0 * d, v]))
         was_over, top_done = c.cascade[0] > 0, c.cascade[3] > 0
         frozen = was_over | ((jnp.arange(n) == n - 1) & top_done)
         left = c.now & ~active
@@ -179,9 +185,13 @@ class _Contacts(eqx.Module):
         head = jnp.stack([(was_over | over), rebound, jnp.where(over, t[0], c.cascade[2]),
                           top_done | apex | over, v_top]).astype(d.dtype)
         cascade = jnp.concatenate([head, jnp.where(over, ys[n : 2 * n], c.cascade[5:])])
+        peaks = None
         if e is not None:  # elementwise, not `.at[].max`: a scatter is a slow unfused operation in the loop
             e = (c.energy[0], jnp.maximum(c.energy[1], jnp.abs(e - c.energy[0])))
-        return _Contacts(rows, now, cascade, e)
+            f = jnp.where(active, stack.forces(d, dd, q), 0.0)
+            peaks = jnp.stack([jnp.where(frozen, c.peaks[0], jnp.maximum(c.peaks[0], f)),
+                               jnp.where(rows[:, 0] < 0, v, c.peaks[1])])
+        return _Contacts(rows, now, cascade, e, peaks)
 
 
 class _Tracked(dfx.AbstractWrappedSolver):

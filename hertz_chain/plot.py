@@ -128,7 +128,7 @@ def plot_sweep(store: str | Path, path: str | Path, *, x: str, y: str | None = N
     names = [k for k in ds.data_vars if k != "chunk_done"]
     if var not in ds.data_vars or var == "chunk_done":
         raise ParameterError("--var", var, f"one of {', '.join(names)}")
-    allowed = [d for d in ds.dims if d not in ("mass", "chunk")] if "design" not in ds.dims else \
+    allowed = [d for d in ds.dims if d not in ("mass", "interface", "chunk")] if "design" not in ds.dims else \
         [k for k in names if ds[k].dims == ("design",) and k not in VARIABLE_NAMES]
     for flag, name in (("--x", x), ("--y", y)):
         if name is not None and name not in allowed:
@@ -184,7 +184,7 @@ def plot_sweep(store: str | Path, path: str | Path, *, x: str, y: str | None = N
 
 
 VARIABLE_NAMES = ("status", "top_velocity_gain", "velocity_gains", "rigid_gain", "rigid_deficit", "energy_error",
-                  "num_steps", "t_final")
+                  "num_steps", "t_final", "peak_force", "top_peak_g", "top_delta_v", "top_equivalent_half_sine")
 
 
 def _label(ds, name: str) -> str:

@@ -280,6 +280,8 @@ def simulate_batch(
         {k: np.where(np.isfinite(np_(v)), np_(v), np.nan) for k, v in out["steps"].items()},
         grid=None if "grid" not in out else {k: np_(v) for k, v in out["grid"].items()},
         scales=out["scales"], stack=stacks, state=states,
+        peak_forces=np_(out["peak_forces"]) if "peak_forces" in out else None,
+        impact_velocities=np_(out["impact_velocities"]) if "impact_velocities" in out else None,
     )
 
 
