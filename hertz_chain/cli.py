@@ -181,6 +181,21 @@ def design(
             typer.echo(f"wrote the {kind.upper()} stack to {write} (hertz-chain simulate {write})")
 
 
+def _check_test_section(stack_file: Path, overrides) -> None:
+    """A `[test]` section is checked even where it is not used (`simulate`), so that a mistake in it is
+    found at once rather than at the first `check`."""
+    import tomllib
+
+    try:
+        has_test = "test" in tomllib.loads(stack_file.read_text(encoding="utf-8-sig"))
+    except (OSError, ValueError):
+        return  # load_stack_file has already judged the file
+    if has_test or any(str(o).strip().startswith("test.") for o in overrides or ()):
+        from .standards import read_test_file
+
+        read_test_file(stack_file, None, overrides)
+
+
 def _mass_option(raw: str | None, flag: str) -> float | None:
     """A mass option: `"8 kg"`, `"100 g"`, or a plain number of kg."""
     from .units import parse_quantity
@@ -261,6 +276,7 @@ def simulate(
         if plot is not None:
             _paths.check_output_path(plot, "--plot", PLOT_SUFFIXES, force)
         spec = load_stack_file(stack_file, overrides)
+        _check_test_section(stack_file, overrides)
     except HertzChainError as exc:
         _fail(str(exc))
     from . import report, workflow

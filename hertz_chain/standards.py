@@ -551,7 +551,9 @@ def read_test_file(path, standard: str | None = None, overrides=None) -> TestSpe
     try:
         return parse_test(doc.get("test"), standard)
     except StackFileError as exc:
-        raise StackFileError(f"{path}: {exc}") from None
+        key = str(exc).split(":", 1)[0]
+        via = " (with --set)" if any(str(o).split("=", 1)[0].strip() == key for o in overrides or ()) else ""
+        raise StackFileError(f"{path}: {exc}{via}") from None
 
 
 def pulse_record(report, spec: TestSpec, samples_per_duration: int = 400):

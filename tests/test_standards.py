@@ -243,3 +243,12 @@ def test_bad_srs_requirements(raw, key):
     with pytest.raises(StackFileError) as err:
         parse_test({"shape": "half-sine", "peak_g": 100, "duration": "1 ms", **raw})
     assert key in str(err.value) and "\n" not in str(err.value)
+
+
+def test_simulate_checks_a_test_section_it_does_not_use(tmp_path):
+    text = open(EXAMPLE).read().replace("band = 0.2", "band = 1.5")
+    (tmp_path / "s.toml").write_text(text)
+    res = runner.invoke(app, ["simulate", str(tmp_path / "s.toml")])
+    assert res.exit_code == 2 and "test.band" in res.output and len(res.output.strip().splitlines()) == 1
+    res = runner.invoke(app, ["check", EXAMPLE, "--set", "test.band=1.5"])
+    assert res.exit_code == 2 and "test.band" in res.output and "(with --set)" in res.output
