@@ -11,19 +11,26 @@ coefficients for a sample interval `T` as
 which is the bilinear-transform Butterworth of `scipy.signal.butter(2, 2.0775·CFC, fs=1/T)` (the
 prewarped digital corner is 2.0775·CFC). One pass attenuates by `1/sqrt(1 + (tan(πfT)/ω_a)^4)`; the two
 passes square it, so the response is −3 dB where `(f/(2.0775 CFC))^4 = √2 − 1`, i.e. at
-`F_H = 1.6667·CFC` (100, 300, 1000 and 1667 Hz for CFC 60, 180, 600, 1000; the standards round the
-last to 1650 Hz), and flat within 0.5 dB up to the CFC frequency itself.
+`1.6667·CFC` (100, 300, 1000 and 1667 Hz for CFC 60, 180, 600, 1000): the standards' `F_N` (their
+table rounds CFC 1000's to 1650 Hz); it is flat within 0.5 dB up to the standards' `F_H`, the CFC
+frequency itself.
 
-The record must be uniformly sampled (`t`, or a sample rate), at least 10 samples per cycle at `F_H`
-(J211-1's guidance is a sample rate of at least 8 to 10 times F_H; below 10 the prewarping bends
+**The corridor** (the response's tolerance lines; ISO 6487's table, as restated in UN Regulation
+No. 94, Rev. 4, Annex 8): `F_L ≤ 0.1 Hz`, `F_H = CFC`, `F_N = 1.65·CFC` (100, 300, 1000, 1650 Hz);
++0.5/−1 dB from `F_L` to `F_H`; +0.5/−4 dB at `F_N`; above `F_N` the upper line falls at −9 dB/octave
+(to −30 dB) and the lower one at −24 dB/octave. tests/test_filters.py checks the filter inside it
+at the lowest sample rate it accepts and at a hundred times F_N (margins: ≥ 0.5 dB in the passband,
+≥ 1 dB at and above F_N). The reading of the table is secondary (docs/references.md, "Lab measures").
+
+The record must be uniformly sampled (`t`, or a sample rate), at least 10 samples per cycle at `F_N`
+(J211-1's guidance is a sample rate of at least 8 to 10 times F_N; below 10 the prewarping bends
 the response and this refuses). The ends are padded by odd reflection (`filtfilt`'s default), so a
 record that starts and ends at rest is filtered without end transients.
 
 References: SAE J211-1, *Instrumentation for Impact Test — Part 1: Electronic Instrumentation*
 (Appendix C, the digital filter); ISO 6487, *Road vehicles — Measurement techniques in impact tests —
-Instrumentation*. The tests check the filter against the Appendix C recursion written out and the
-closed-form response above; the standards' corridor (the tolerance lines of the response) was not
-available in a readable source and is not tested yet (docs/lab-workflow.md).
+Instrumentation*. The tests check the filter against the Appendix C recursion written out, the
+closed-form response above and the corridor.
 """
 
 from __future__ import annotations
@@ -43,7 +50,7 @@ CFC_CLASSES = (60, 180, 600, 1000)
 #: J211-1 Appendix C's factor between the CFC and the single pass's digital corner frequency.
 CORNER_FACTOR = 2.0775
 
-#: Fewest samples per cycle at F_H = 5/3 CFC that the filter accepts.
+#: Fewest samples per cycle at the −3 dB frequency F_N = 5/3 CFC that the filter accepts.
 MIN_SAMPLES_PER_CYCLE = 10.0
 
 
@@ -54,8 +61,8 @@ def _check_cfc(cfc) -> int:
 
 
 def cfc_corner(cfc: int) -> float:
-    """The −3 dB frequency F_H (Hz) of the forward-backward CFC filter: `2.0775·CFC·(√2 − 1)^(1/4)`
-    (= 1.6667·CFC)."""
+    """The −3 dB frequency (Hz) of the forward-backward CFC filter, the standards' F_N:
+    `2.0775·CFC·(√2 − 1)^(1/4)` (= 1.6667·CFC)."""
     return CORNER_FACTOR * _check_cfc(cfc) * (math.sqrt(2.0) - 1.0) ** 0.25
 
 
@@ -63,7 +70,7 @@ def cfc_coefficients(cfc: int, sample_rate: float) -> tuple[np.ndarray, np.ndarr
     """`(b, a)` of one pass of the CFC filter in `scipy.signal` form (`a[0] = 1`), for a sample rate in Hz.
 
     **Raises:** `ParameterError` for a class not in `CFC_CLASSES`, or a sample rate below
-    `MIN_SAMPLES_PER_CYCLE` samples per cycle at F_H.
+    `MIN_SAMPLES_PER_CYCLE` samples per cycle at F_N (the −3 dB frequency).
     """
     cfc = _check_cfc(cfc)
     fs = float(sample_rate)
@@ -71,7 +78,7 @@ def cfc_coefficients(cfc: int, sample_rate: float) -> tuple[np.ndarray, np.ndarr
     if not (np.isfinite(fs) and fs >= need):
         raise ParameterError("sample_rate", sample_rate,
                              f"at least {need:.6g} Hz for CFC {cfc} ({MIN_SAMPLES_PER_CYCLE:g} samples per cycle at "
-                             f"F_H = {cfc_corner(cfc):.6g} Hz)")
+                             f"F_N = {cfc_corner(cfc):.6g} Hz, the -3 dB frequency)")
     b, a = signal.butter(2, CORNER_FACTOR * cfc, btype="low", fs=fs)
     return b, a
 
@@ -108,7 +115,7 @@ def cfc_filter(t, a, cfc: int) -> np.ndarray:
     **Returns:** the filtered samples (same shape), phaseless (forward and backward passes).
 
     **Raises:** `ParameterError` for an unknown class, non-uniform times, non-finite samples, a record
-    shorter than the filter's padding, or a sample rate under 10 samples per cycle at F_H.
+    shorter than the filter's padding, or a sample rate under 10 samples per cycle at F_N.
     """
     fs = float(t) if np.ndim(t) == 0 else _sample_rate(t)
     x = np.asarray(a, dtype=float)

@@ -101,3 +101,28 @@ def test_bad_input_is_one_clear_error(args, key):
     with pytest.raises(ParameterError) as err:
         cfc_filter(*args)
     assert err.value.name == key and "\n" not in str(err.value)
+
+
+#: The corridor of ISO 6487's table as restated in UN Regulation No. 94, Rev. 4, Annex 8 (a secondary,
+#: machine-read copy; docs/references.md, "Lab measures"): F_N per class, the passband F_L..F_H = CFC.
+F_N = {60: 100.0, 180: 300.0, 600: 1000.0, 1000: 1650.0}
+
+
+@pytest.mark.parametrize("cfc", CFC_CLASSES)
+@pytest.mark.parametrize("per_fn", [10.01, 100.0])
+def test_response_lies_in_the_corridor(cfc, per_fn):
+    """+0.5/-1 dB from 0.1 Hz to F_H = CFC; +0.5/-4 dB at F_N; above F_N under the upper line (+0.5 dB
+    at F_N, -9 dB/octave, floor -30 dB) up to 0.4 fs, and over the lower line (-4 dB at F_N,
+    -24 dB/octave) down to -30 dB; at the lowest sample rate the filter accepts (10 per cycle at its
+    -3 dB frequency, 1.667 CFC) and at 100 F_N."""
+    fs = per_fn * max(F_N[cfc], 5 / 3 * cfc)
+    db = lambda f: 20 * np.log10(cfc_response(cfc, fs, f))  # noqa: E731
+    band = db(np.geomspace(0.1, cfc, 300))
+    assert band.max() <= 0.5 and band.min() >= -1.0
+    assert -4.0 <= db([F_N[cfc]])[0] <= 0.5
+    f = np.geomspace(F_N[cfc], 0.4 * fs, 300)
+    r = db(f)
+    upper = np.maximum(0.5 - 9 * np.log2(f / F_N[cfc]), -30.0)
+    lower = -4.0 - 24 * np.log2(f / F_N[cfc])
+    assert np.all(r <= upper)
+    assert np.all(r[lower >= -30.0] >= lower[lower >= -30.0])
