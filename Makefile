@@ -29,6 +29,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/optimize.py --output benchmarks/optimize.md
 	$(BIN)/python benchmarks/sweep.py --output benchmarks/sweep.md
 	$(BIN)/python benchmarks/long_chains.py --output benchmarks/long_chains.md
+	$(BIN)/python benchmarks/baselines.py --output benchmarks/baselines.md --json benchmarks/baselines.json
 
 # A one-minute smoke run (n = 2, one regime) into out/; CI runs the same through tests/test_benchmarks_smoke.py.
 bench-smoke: $(STAMP)

@@ -1,0 +1,365 @@
+"""Compiled baselines of project issue 22: what an expert user would pick instead of hertz_chain.
+
+The same equations as the library (a stack of masses with Hertz or clamped Tsuji contacts, the scaled
+state `[x, v, D]` of `hertz_chain.simulate`'s docstring, g = 0, the benchmark cases of `cases.py`), written
+as a numba `@njit` right-hand side, checked against the library's own scaled vector field at random states
+(to 1e-12), and integrated by
+
+- scipy `solve_ivp` (DOP853, LSODA, Radau) with the numba right-hand side (and a numba Jacobian for the
+  implicit methods);
+- numbalsoda (compiled LSODA with a numba cfunc), when it installs from the registry (it ships as source
+  only and must build its C++ core: `NUMBALSODA` says whether it did);
+- a plain numba Tsit5 loop with the library's step-size controller (diffrax's `PIDController` with
+  `pcoeff = 0.4`, `icoeff = 0.3`, the library's first and largest steps, the same RMS error norm), the
+  compiled-code floor, checked to give the library's launch velocity to 1e-9 with the same step count.
+
+Every method runs to the reference solution's end time (`t_final` of a tight library solve: with g = 0
+every velocity is constant after it, so the top mass's velocity there is its launch velocity, as in
+`methods.ScipyCase`). The matched-accuracy rule is `methods.find_matched` at a relative error of 1e-7
+on the top launch velocity. `python benchmarks/baselines.py --output benchmarks/baselines.md` (part of
+`make bench`); `--quick` for one case.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+from scipy.integrate import solve_ivp
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import cases  # noqa: E402
+from methods import MAX_STEP, DiffraxCase, fine_grid, find_matched, median_time, rel_err, steps_budget  # noqa: E402
+
+import hertz_chain as hc  # noqa: E402
+from hertz_chain.simulate import _scaled_field, _scales  # noqa: E402
+
+MATCH = 1e-7
+FIRST_STEP = hc.Tolerances().first_step  # scaled units, the library default
+
+
+# ============================================================================ the equations, in numba
+@njit(cache=True)
+def field_into(out, f, fel, dd, ys, m, k, c, ground, scale, T):
+    """The scaled vector field of a stack (`hertz_chain._solve._scaled_field`) written into `out`, for a
+    state of `3n` entries `[x, v, D]` or, with the library's onset proxies (`Tolerances.resolve_onsets`,
+    its default), `4n` entries `[x, v, D, z]` with `z_j' = sqrt(max(delta_j, 0) / L)`: Hertz `k d^1.5`
+    plus Tsuji damping `c d^0.25 d'` (c = eta sqrt(m_eff k); 0 for Hertz), clamped >= 0. `f`, `fel`, `dd`
+    are scratch arrays of length n. The flag entry of the library's state (no dynamics) is left out."""
+    n = m.shape[0]
+    proxy = ys.shape[0] == 4 * n
+    for j in range(n):
+        if j == 0:
+            d = -ys[0] * scale[0] if ground else 0.0
+            r = -ys[n] * scale[n] if ground else 0.0
+        else:
+            d = ys[j - 1] * scale[j - 1] - ys[j] * scale[j]
+            r = ys[n + j - 1] * scale[n + j - 1] - ys[n + j] * scale[n + j]
+        dd[j] = r
+        f[j] = 0.0
+        fel[j] = 0.0
+        if proxy:
+            on = ground or j > 0
+            out[3 * n + j] = math.sqrt((d if d > 0.0 else 0.0) / scale[0] + 1e-300) if on else 0.0
+        if d > 0.0:
+            el = k[j] * d * math.sqrt(d)
+            fj = el + c[j] * math.sqrt(math.sqrt(d)) * r
+            fel[j] = el
+            f[j] = fj if fj > 0.0 else 0.0
+    for i in range(n):
+        above = f[i + 1] if i + 1 < n else 0.0
+        out[i] = T * ys[n + i] * scale[n + i] / scale[i]
+        out[n + i] = T * (f[i] - above) / m[i] / scale[n + i]
+        out[2 * n + i] = T * (f[i] - fel[i]) * dd[i] / scale[2 * n + i]
+
+
+@njit(cache=True)
+def field(ys, m, k, c, ground, scale, T):
+    """`field_into` returning a new array (for scipy and the checks)."""
+    n = m.shape[0]
+    out = np.empty(ys.shape[0])
+    field_into(out, np.empty(n), np.empty(n), np.empty(n), ys, m, k, c, ground, scale, T)
+    return out
+
+
+@njit(cache=True)
+def jacobian(ys, m, k, c, ground, scale, T):
+    """Central differences of `field` (the implicit methods' Jacobian; step 1e-7 of the scaled state)."""
+    n3 = ys.shape[0]
+    J = np.empty((n3, n3))
+    for i in range(n3):
+        h = 1e-7 * max(1.0, abs(ys[i]))
+        yp = ys.copy()
+        ym = ys.copy()
+        yp[i] += h
+        ym[i] -= h
+        J[:, i] = (field(yp, m, k, c, ground, scale, T) - field(ym, m, k, c, ground, scale, T)) / (2 * h)
+    return J
+
+
+def _tableau():
+    """Tsit5 (Tsitouras 2011) as diffrax holds it (`diffrax.Tsit5.tableau`): the stage matrix `A` (7 x 7,
+    row 6 = the solution weights, as the method's last stage is the new state), `B` and the error
+    weights `E`."""
+    import diffrax as dfx
+
+    tab = dfx.Tsit5.tableau
+    A = np.zeros((7, 7))
+    for i, row in enumerate(tab.a_lower):
+        A[i + 1, : len(row)] = np.asarray(row, dtype=float)
+    return A, np.asarray(tab.b_sol, dtype=float), np.asarray(tab.b_error, dtype=float)
+
+
+_A, _B, _E = _tableau()
+
+
+@njit(cache=True)
+def tsit5(y0, t1, rtol, atol, max_step, first_step, m, k, c, ground, scale, T, A, B, E):
+    """Integrate the scaled field from 0 to `t1` with Tsit5 and the library's controller: diffrax's
+    `PIDController(pcoeff=0.4, icoeff=0.3, dtmax=max_step)` (error order 5, as diffrax gives Tsit5;
+    safety 0.9, an accepted step never shrinks the next, a rejected one shrinks it by 0.2 to 0.9, the
+    previous accepted inverse error in the P term) and first step `first_step`; RMS error norm over the
+    library's state, which carries one more (flag) entry without error. No allocation in the loop.
+    Returns `(y, steps, accepted)`."""
+    n3 = y0.shape[0]
+    n = m.shape[0]
+    y = y0.copy()
+    yn = np.empty(n3)
+    ys = np.empty(n3)
+    K = np.empty((7, n3))
+    f, fel, dd = np.empty(n), np.empty(n), np.empty(n)
+    field_into(K[0], f, fel, dd, y, m, k, c, ground, scale, T)
+    t = 0.0
+    h = first_step
+    prev_inv = 1.0
+    steps = 0
+    accepted = 0
+    while t < t1:
+        ht = min(h, t1 - t)
+        for s in range(1, 7):
+            for i in range(n3):
+                acc = y[i]
+                for r in range(s):
+                    acc += ht * A[s, r] * K[r, i]
+                ys[i] = acc
+            field_into(K[s], f, fel, dd, ys, m, k, c, ground, scale, T)
+        total = 0.0
+        for i in range(n3):
+            ynew = y[i]
+            err = 0.0
+            for r in range(7):
+                ynew += ht * B[r] * K[r, i]
+                err += ht * E[r] * K[r, i]
+            yn[i] = ynew
+            sc = atol + rtol * max(abs(y[i]), abs(ynew))
+            total += (err / sc) ** 2
+        norm = math.sqrt(total / (n3 + 1))
+        steps += 1
+        keep = norm < 1.0
+        inv = math.inf if norm == 0.0 else 1.0 / norm
+        factor = 0.9 * inv ** (0.7 / 5.0) * prev_inv ** (-0.4 / 5.0)
+        lo, hi = (1.0, 10.0) if keep else (0.2, 0.9)
+        factor = min(max(factor, lo), hi)
+        if inv == 0.0 or math.isinf(inv):
+            inv = 1.0
+        h = min(ht * factor, max_step)
+        if keep:
+            t += ht
+            y[:] = yn
+            K[0, :] = K[6, :]
+            accepted += 1
+            prev_inv = inv
+    return y, steps, accepted
+
+
+# ============================================================================ one case
+class Case:
+    """The numba equations of one benchmark case (`cases.build`) and its library reference."""
+
+    def __init__(self, n: int, regime: str):
+        self.n, self.regime = n, regime
+        self.stack, self.state = cases.build(n, regime)
+        reg = cases.REGIMES[regime]
+        m = np.asarray(self.stack.masses, dtype=float)
+        meff = cases.effective_masses(m)
+        kk = np.array([reg.ground_stiffness] + [cases.K_STEEL] * (n - 1))
+        if reg.law == "tsuji":
+            eta = np.array([float(self.stack.law_of(j).eta) for j in range(n)])
+            cc = eta * np.sqrt(meff * kk)
+        else:
+            cc = np.zeros(n)
+        sc = _scales(self.stack, self.state)
+        self.scale = np.asarray(sc.vector(n), dtype=float)
+        self.T, self.V = float(sc.time), float(sc.velocity)
+        self.args = (m, kk, cc, True, self.scale, self.T)
+        self.y0 = np.asarray(self.state.flat(), dtype=float) / self.scale
+        self.y0p = np.concatenate([self.y0, np.zeros(n)])  # with the onset proxies (the library's default)
+        dc = DiffraxCase(self.stack, self.state)
+        ref = dc.solve("dopri8", 1e-13, max_steps=65536)
+        self.ref, self.t1 = ref["v_top"], ref["t_final"] / self.T
+        self.dc = dc
+
+    def check_field(self, samples: int = 20, seed: int = 0) -> float:
+        """Largest relative difference of the numba field from the library's `_scaled_field`, with and
+        without the onset proxies, at random states around the initial one."""
+        rng = np.random.default_rng(seed)
+        lib_args = (self.stack, self.scale, self.T)
+        worst = 0.0
+        for _ in range(samples):
+            y = self.y0p + rng.normal(0, 1, self.y0p.size)
+            for yy, lib_y in ((y[: 3 * self.n], y[: 3 * self.n]), (y, np.append(y, 0.0))):
+                a = field(yy, *self.args)
+                b = np.asarray(_scaled_field(0.0, lib_y, lib_args))[: yy.size]
+                worst = max(worst, float(np.max(np.abs(a - b)) / max(np.max(np.abs(b)), 1e-300)))
+        return worst
+
+    def scipy(self, method: str, rtol: float) -> dict:
+        f = lambda t, y: field(y, *self.args)  # noqa: E731
+        kw = {"jac": lambda t, y: jacobian(y, *self.args)} if method in ("Radau", "LSODA") else {}
+        t0 = time.perf_counter()
+        sol = solve_ivp(f, (0.0, self.t1), self.y0, method=method, rtol=rtol, atol=rtol, max_step=MAX_STEP, **kw)
+        el = time.perf_counter() - t0
+        v = float(sol.y[2 * self.n - 1, -1] * self.V)
+        return dict(ok=bool(sol.success), err=rel_err(v, self.ref), time=el, nfev=int(sol.nfev),
+                    accepted=len(sol.t) - 1, rtol=rtol)
+
+    def numba_tsit5(self, rtol: float) -> dict:
+        """The numba loop on the library's default equations (with the onset proxies)."""
+        run = lambda: tsit5(self.y0p, self.t1, rtol, rtol, MAX_STEP, FIRST_STEP, *self.args, _A, _B, _E)  # noqa: E731
+        y, steps, acc = run()
+        v = float(y[2 * self.n - 1] * self.V)
+        return dict(ok=True, err=rel_err(v, self.ref), steps=int(steps), accepted=int(acc), rtol=rtol, v=v,
+                    time=median_time(run, 9, budget_s=1.0))
+
+    def library(self, rtol: float) -> dict:
+        """`hc.simulate` with the library's defaults but `rtol = atol` (onset proxies on, as users run)."""
+        sol = hc.simulate(self.stack, self.state, tolerances=hc.Tolerances(rtol=rtol, atol=rtol), max_steps=65536,
+                          throw=False)
+        v = float(sol.launch_velocities[-1])
+        return dict(ok=sol.ok, v_top=v, err=rel_err(v, self.ref), steps=int(sol.num_steps),
+                    accepted=int(sol.num_accepted_steps), rtol=rtol)
+
+    def time_library(self, rtol: float, steps: int, repeats: int) -> float:
+        """Median time (s) of one compiled `hc.launch_velocity` call with the library's defaults."""
+        import jax
+
+        tol = hc.Tolerances(rtol=rtol, atol=rtol)
+        ms = steps_budget(steps)
+        return median_time(lambda: jax.block_until_ready(hc.launch_velocity(self.stack, self.state, tolerances=tol,
+                                                                            max_steps=ms)), repeats)
+
+
+NUMBALSODA = None
+try:  # noqa: SIM105
+    import numbalsoda as _nbl  # type: ignore
+
+    NUMBALSODA = _nbl
+except Exception as exc:  # pragma: no cover - depends on the build
+    NUMBALSODA_WHY = (f"not installed ({type(exc).__name__}): numbalsoda 0.3.4 (2022) ships as source only and its "
+                      "build needs a Fortran compiler (CMake: 'No CMAKE_Fortran_COMPILER could be found' on the "
+                      "benchmark machine, which has none)")
+else:
+    NUMBALSODA_WHY = ""
+
+
+def run_case(n: int, regime: str, quick: bool) -> dict:
+    c = Case(n, regime)
+    out = dict(n=n, regime=regime, field_check=c.check_field(), ref=c.ref)
+    grid = fine_grid(1e-5, 1e-12)
+    memo: dict = {}
+
+    def getter(kind):
+        def get(rtol):
+            key = (kind, rtol)
+            if key not in memo:
+                memo[key] = (c.library(rtol) if kind == "library" else c.numba_tsit5(rtol) if kind == "numba-tsit5"
+                             else c.scipy(kind, rtol))
+            return memo[key]
+        return get
+
+    rows = {}
+    for kind in ("library", "numba-tsit5", "DOP853", "LSODA", "Radau"):
+        if quick and kind == "Radau":
+            continue
+        r = find_matched(getter(kind), grid, MATCH)
+        if r is None:
+            rows[kind] = dict(ok=False)
+            continue
+        if kind == "library":
+            r["time"] = c.time_library(r["rtol"], r["steps"], repeats=5 if quick else 25)
+        elif kind in ("DOP853", "LSODA", "Radau"):
+            ts = [r["time"]] + [c.scipy(kind, r["rtol"])["time"] for _ in range(2 if quick else 4)]
+            r["time"] = statistics.median(ts)
+        rows[kind] = r
+    # the floor reproduces the library's launch velocity (same algorithm, same tolerance): 1e-9 at 1e-10
+    lib = c.library(1e-10)
+    nb = c.numba_tsit5(1e-10)
+    out["tsit5_agreement_at_1e-10"] = rel_err(nb["v"], lib["v_top"])
+    out["tsit5_steps_at_1e-10"] = {"library": lib["steps"], "numba": nb["steps"]}
+    out["rows"] = rows
+    return out
+
+
+def _write(data: dict, path: str | None) -> None:
+    lines = ["# Compiled baselines (issue 22)", "",
+             f"Generated by `benchmarks/baselines.py{' --quick' if data['quick'] else ''}` on {data['date']}, "
+             f"{data['machine']}; load average at start {data['load'][0]:.2f}, at end {data['load'][1]:.2f}.", "",
+             "Matched accuracy: relative error <= 1e-7 on the top launch velocity (`methods.find_matched`); "
+             "times are medians of whole solves after compilation. Ratio = hertz_chain `launch_velocity` "
+             "(Tsit5) time / the method's time (above 1: the method is faster).", "",
+             f"numbalsoda: {'used' if NUMBALSODA is not None else NUMBALSODA_WHY}.", "",
+             "| case | method | rtol | steps | time (ms) | hertz_chain / method |", "|---|---|---|---|---|---|"]
+    for case in data["cases"]:
+        lib = case["rows"].get("library", {})
+        for kind, r in case["rows"].items():
+            if not r.get("ok"):
+                lines.append(f"| n={case['n']} {case['regime']} | {kind} | — | — | — | not matched |")
+                continue
+            ratio = lib["time"] / r["time"] if lib.get("ok") else float("nan")
+            steps = r.get("steps", r.get("accepted"))
+            lines.append(f"| n={case['n']} {case['regime']} | {kind} | {r['rtol']:.0e} | {steps} | "
+                         f"{1e3 * r['time']:.3f} | {ratio:.2f} |")
+    lines += ["", "Checks: the numba field equals the library's scaled field at random states (largest relative "
+              "difference per case below); the numba Tsit5 loop gives the library's launch velocity at rtol 1e-10.", ""]
+    for case in data["cases"]:
+        lines.append(f"- n={case['n']} {case['regime']}: field {case['field_check']:.1e}; Tsit5 launch velocity "
+                     f"{case['tsit5_agreement_at_1e-10']:.1e} apart; steps {case['tsit5_steps_at_1e-10']}")
+    text = "\n".join(lines) + "\n"
+    if path:
+        Path(path).write_text(text)
+    print(text)
+
+
+def main(argv=None) -> int:
+    import datetime
+    import platform
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="one case (n = 5, gapped Tsuji), no Radau")
+    ap.add_argument("--output", help="Markdown file to write")
+    ap.add_argument("--json", help="raw results (JSON)")
+    args = ap.parse_args(argv)
+    todo = [(5, "gapped-tsuji")] if args.quick else [(10, "gapped-hertz"), (10, "gapped-tsuji")]
+    data = dict(quick=args.quick, date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="minutes"),
+                machine=f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores",
+                load=[os.getloadavg()[0], math.nan], cases=[])
+    for n, regime in todo:
+        print(f"case n={n} {regime} ...", flush=True)
+        data["cases"].append(run_case(n, regime, args.quick))
+    data["load"][1] = os.getloadavg()[0]
+    _write(data, args.output)
+    if args.json:
+        Path(args.json).write_text(json.dumps(data, indent=1, default=float))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
