@@ -522,7 +522,8 @@ def compare(
     try:
         with progress(f"simulating {stack_file.name}"):
             result_report = workflow.run_spec(spec)
-            comparison = run_compare(result_report, record, cfc=cfc, align=align)
+            comparison = run_compare(result_report, record, cfc=cfc, align=align,
+                                     srs_options=workflow.srs_options(spec))
     except SolverError as exc:
         typer.echo(f"hertz-chain: {Status.FAILED.text}: {_one_line(exc)}", err=True)
         raise typer.Exit(code=Status.FAILED.exit_code)

@@ -321,7 +321,7 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
     from .filters import CFC_CLASSES, cfc_filter
     from .measured import ALIGNMENTS, compare, prepare_record, read_pulse_csv
     from .optimize import OptimizeStatus, _set_interface
-    from .workflow import run_spec
+    from .workflow import run_spec, srs_options
 
     t0 = time.perf_counter()
     if cfc is not None and cfc not in CFC_CLASSES:
@@ -335,7 +335,8 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
         measured = read_pulse_csv(measured)
 
     start_report = run_spec(spec)
-    start = compare(start_report, measured, cfc=cfc, align=align)
+    opts = srs_options(spec)
+    start = compare(start_report, measured, cfc=cfc, align=align, srs_options=opts)
     t, m, notes = prepare_record(measured, cfc)
     if cfc is not None:
         m = cfc_filter(t, m, cfc)
@@ -437,7 +438,7 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
 
     text = tomli_w.dumps(out)
     fitted_report = run_spec(parse_stack(tomllib.loads(text)))
-    fitted = compare(fitted_report, measured, cfc=cfc, shift=float(shift))
+    fitted = compare(fitted_report, measured, cfc=cfc, shift=float(shift), srs_options=opts)
     return FitResult(tuple(params), float(shift), float(se_theta[-1] * width), float(math.sqrt(float(r @ r) / N)), N,
                      dof, corr, status, message, model.evaluations, time.perf_counter() - t0, start, fitted,
                      "# fitted by hertz-chain fit\n" + text, tuple(notes))

@@ -31,6 +31,7 @@ import dataclasses
 import io
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -269,7 +270,7 @@ class Comparison:
     | `alignment`, `cfc` | how it was aligned; the CFC applied to both (None: unfiltered) |
     | `measured_metrics`, `model_metrics` | `PulseMetrics` of each |
     | `sprague_geers` | `(M, P, C)` of the model against the measurement |
-    | `srs_frequencies_Hz`, `measured_srs`, `model_srs` | maximax SRS (Q = 10, g) of each |
+    | `srs_frequencies_Hz`, `measured_srs`, `model_srs` | the SRS of each (`srs_options`; default maximax acceleration, Q = 10, g) |
     | `notes` | one line each: what was capped or assumed |
     """
 
@@ -287,6 +288,7 @@ class Comparison:
     model_srs: np.ndarray
     notes: tuple[str, ...] = ()
     source: str = ""
+    srs_options: Any = None  # `srs.SRSOptions` of both spectra (None: the defaults)
 
     def to_dict(self) -> dict:
         """JSON-ready summary (SI units, plus g and ms where the key says so)."""
@@ -294,6 +296,9 @@ class Comparison:
             return {"peak_g": pm.peak_g, "duration_10_ms": pm.duration_10 * 1e3,
                     "equivalent_half_sine_ms": pm.equivalent_half_sine_duration * 1e3,
                     "rise_time_ms": pm.rise_time * 1e3, "delta_v_mps": pm.delta_v_main}
+        from .srs import SRSOptions
+
+        o = self.srs_options if self.srs_options is not None else SRSOptions()
         mm, cm = metrics(self.measured_metrics), metrics(self.model_metrics)
         M, P, C = self.sprague_geers
         return {
@@ -305,9 +310,10 @@ class Comparison:
             "model": cm,
             "relative_difference": {k: (cm[k] - mm[k]) / mm[k] if mm[k] else None for k in mm},
             "sprague_geers": {"magnitude": M, "phase": P, "comprehensive": C},
-            "srs": {"type": "acceleration", "peak": "maximax", "q": 10.0,
-                    "frequencies_Hz": self.srs_frequencies_Hz.tolist(), "measured_g": self.measured_srs.tolist(),
-                    "model_g": self.model_srs.tolist(),
+            "srs": {"type": o.kind, "peak": {"abs": "maximax", "pos": "positive", "neg": "negative"}[o.peak],
+                    "q": o.Q, "per_octave": o.per_octave, "units": "g" if o.kind == "acceleration" else "m/s",
+                    "frequencies_Hz": self.srs_frequencies_Hz.tolist(), "measured": self.measured_srs.tolist(),
+                    "model": self.model_srs.tolist(),
                     "max_abs_difference_dB": float(np.max(np.abs(20 * np.log10(self.model_srs / self.measured_srs))))},
             "notes": list(self.notes),
         }
@@ -343,7 +349,7 @@ def prepare_record(measured: MeasuredPulse, cfc: int | None = None) -> tuple[np.
 
 
 def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: str = "xcorr",
-            shift: float | None = None) -> Comparison:
+            shift: float | None = None, srs_options=None) -> Comparison:
     """Compare the top pulse of a simulated stack with a measured pulse.
 
     **Arguments:**
@@ -356,6 +362,9 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
     - `align`: `"xcorr"` (default), `"onset"` or `"none"` (`align_shift`).
     - `shift`: a time shift (s) to use as it is instead of aligning (`hertz_chain.fit` passes its
       fitted shift); `alignment` then reads `"given"`.
+    - `srs_options`: how both SRS are computed (`srs.SRSOptions`: Q, points per octave, band, peak,
+      acceleration or pseudo-velocity; the stack file's `[srs]`); default maximax acceleration, Q = 10,
+      1/12 octave over the default band.
 
     The model's accelerometer (`analysis.accelerometer`: the dense solution) is sampled on the
     measurement's grid, shifted, filtered alike; outside the run it reads zero (free flight before
@@ -374,7 +383,7 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
     """
     from .analysis import accelerometer
     from .filters import cfc_filter
-    from .srs import octave_frequencies, srs_uniform
+    from .srs import SRSOptions, octave_frequencies, srs_uniform
 
     if align not in ALIGNMENTS:
         raise ParameterError("align", align, f"one of {', '.join(ALIGNMENTS)}")
@@ -419,15 +428,21 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
                          "to the window's edge")
     M, P, C = sprague_geers(meas, model, t)
     D = meas_pm.duration_10
-    step = 2.0 ** (1 / 12) * (1 + 1e-12)
-    f_lo, f_hi = min(100.0, 0.1 / D) / step, max(1e4, 20.0 / D) * step
+    opts = srs_options if srs_options is not None else SRSOptions()
+    step = 2.0 ** (1 / opts.per_octave) * (1 + 1e-12)
+    if opts.band is not None:
+        f_lo, f_hi = opts.band[0] / step, opts.band[1] * step
+    else:
+        f_lo, f_hi = min(100.0, 0.1 / D) / step, max(1e4, 20.0 / D) * step
     cap = 0.1 / h
     if f_hi > cap:
         notes.append(f"SRS band capped at {cap:.6g} Hz (a tenth of the measurement's {1 / h:.6g} Hz sample rate), "
                      f"below the {f_hi / step:.6g} Hz asked for")
         f_hi = cap
-    freqs = octave_frequencies(f_lo, f_hi)
-    s_meas = srs_uniform(meas / G0, 1.0 / h, freqs, 10.0)
-    s_model = srs_uniform(model / G0, 1.0 / h, freqs, 10.0)
+    freqs = octave_frequencies(f_lo, f_hi, opts.per_octave)
+    unit = G0 if opts.kind == "acceleration" else 1.0  # g; a pseudo-velocity from m/s² is in m/s
+    kw = dict(peak=opts.peak, kind=opts.kind)
+    s_meas = srs_uniform(meas / unit, 1.0 / h, freqs, opts.Q, **kw)
+    s_model = srs_uniform(model / unit, 1.0 / h, freqs, opts.Q, **kw)
     return Comparison(t, meas, model, float(shift), align, cfc, meas_pm, model_pm, (M, P, C), freqs,
-                      s_meas.maximax, s_model.maximax, tuple(notes), measured.source)
+                      s_meas.maximax, s_model.maximax, tuple(notes), measured.source, opts)

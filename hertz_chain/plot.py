@@ -302,5 +302,7 @@ def plot_compare(comparison, path: str | Path) -> None:
            title=f"Sprague–Geers M {M:+.3f}, P {P:.3f}, C {C:.3f}" + (f" (CFC {c.cfc})" if c.cfc else ""))
     ax.legend(fontsize="small")
     _srs_panel(bx, c.srs_frequencies_Hz, [(c.measured_srs, "measured", "0.2", "-"), (c.model_srs, "model", "C3", "-")])
+    s = c.to_dict()["srs"]
+    bx.set_ylabel(f"{s['peak']} {s['type']} SRS ({s['units']}), Q = {s['q']:g}")
     fig.savefig(path, dpi=120, format="png")
     plt.close(fig)

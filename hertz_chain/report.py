@@ -484,6 +484,7 @@ def compare_table(c) -> str:
     sg = d["sprague_geers"]
     out.append(f"Sprague-Geers: magnitude {sg['magnitude']:+.4f}, phase {sg['phase']:.4f}, comprehensive "
                f"{sg['comprehensive']:.4f}")
-    out.append(f"SRS (maximax acceleration, Q = 10, {c.srs_frequencies_Hz[0]:.4g}-{c.srs_frequencies_Hz[-1]:.4g} Hz): largest difference "
+    s = d["srs"]
+    out.append(f"SRS ({s['peak']} {s['type']}, Q = {s['q']:g}, {c.srs_frequencies_Hz[0]:.4g}-{c.srs_frequencies_Hz[-1]:.4g} Hz): largest difference "
                f"{d['srs']['max_abs_difference_dB']:.2f} dB")
     return "\n".join(out)

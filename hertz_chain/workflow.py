@@ -45,11 +45,15 @@ def run_spec(spec: StackSpec) -> Report:
         sol = simulate(built.stack, built.state, ts=ts, **dict(options, t_max=sol.t_final))
     tol = {k: built.simulate_options["tolerances"].__getattribute__(k) for k in ("rtol", "atol")} \
         if built.simulate_options.get("tolerances") is not None else None
+    return analyse(sol, nominal_restitution=built.nominal_restitution, tolerances=tol, srs_options=srs_options(spec))
+
+
+def srs_options(spec: StackSpec):
+    """The `srs.SRSOptions` of a stack file's `[srs]` section."""
     from .srs import SRSOptions
 
     o = spec.srs
-    options = SRSOptions(Q=o.q, per_octave=o.per_octave, band=o.band, peak=o.peak, kind=o.type)
-    return analyse(sol, nominal_restitution=built.nominal_restitution, tolerances=tol, srs_options=options)
+    return SRSOptions(Q=o.q, per_octave=o.per_octave, band=o.band, peak=o.peak, kind=o.type)
 
 
 def simulate_file(path: str | Path) -> Report:

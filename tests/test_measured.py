@@ -202,3 +202,21 @@ def test_three_columns_and_a_cut_pulse_are_noted(report, tmp_path):
     c = compare(report, read_pulse_csv(tmp_path / "three.csv"), align="onset")
     assert any("3 columns" in n for n in c.notes)
     assert any("cuts the measured pulse" in n for n in c.notes)
+
+
+def test_compare_follows_the_files_srs_section(files, tmp_path):
+    """[srs] q = 20 and type = pseudo-velocity reach the comparison: the JSON says so, the units are m/s,
+    and for the clean record the two spectra agree as the pulses do (1e-5); the measured one equals
+    pyyeti's pseudo-velocity SRS of the same samples (an independent implementation) to 1e-6."""
+    from pyyeti import srs as pyyeti_srs
+
+    (tmp_path / "s.toml").write_text(STACK + '[srs]\nq = 20\ntype = "pseudo-velocity"\nper_octave = 6\n')
+    res = runner.invoke(app, ["compare", str(tmp_path / "s.toml"), str(files / "clean.csv"), "--json"])
+    assert res.exit_code == 0, res.output
+    s = json.loads(res.stdout)["srs"]
+    assert (s["type"], s["q"], s["units"], s["per_octave"]) == ("pseudo-velocity", 20.0, "m/s", 6)
+    np.testing.assert_allclose(s["model"], s["measured"], rtol=1e-5)
+    t, a = hertz_drop()
+    ref = pyyeti_srs.srs(a * G0, 1e6, np.asarray(s["frequencies_Hz"]), 20.0, ic="zero", stype="pvelo", peak="abs",
+                         time="total", rolloff="none", parallel="no")
+    np.testing.assert_allclose(s["measured"], np.abs(np.ravel(ref)), rtol=1e-6)
