@@ -107,7 +107,11 @@ class BatchSolution:
     Without a step history (`save_steps=False`) also `peak_forces (B, n)`: each interface's largest
     contact force at the accepted points of the first cascade (N; low by O(h^2) of the step), and
     `impact_velocities (B, n)`: the upper body's velocity at the last accepted point before the
-    interface's first contact (m/s, upward > 0); None with a step history (analyse a design instead).
+    interface's first contact (m/s, upward > 0); `restitutions (B, n)`: each interface's first
+    contact's separation over approach speed (paper Eq 2), both read at the accepted points just around
+    it, in free flight, where gravity leaves the relative speed of two falling bodies unchanged (against
+    the fixed ground it changes by up to g h within a step h; a neighbour's contact acting within that
+    step also shifts it); NaN without a finished contact; all three None with a step history (analyse a design instead).
     """
 
     status_code: np.ndarray
@@ -128,6 +132,7 @@ class BatchSolution:
     state: State
     peak_forces: np.ndarray | None = None
     impact_velocities: np.ndarray | None = None
+    restitutions: np.ndarray | None = None
 
     @property
     def ok(self) -> np.ndarray:

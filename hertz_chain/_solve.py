@@ -170,6 +170,12 @@ def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, full: bool 
     else:
         out["energy_error"] = contacts.energy[1] / sc.energy
         out["peak_forces"], out["impact_velocities"] = contacts.peaks[0], contacts.peaks[1]
+        # restitution of the interface's first contact: separation over approach speed, both in free flight
+        # (relative speeds unchanged by gravity between two falling bodies); NaN without a finished contact
+        pk = contacts.peaks
+        approach, release = pk[2] - pk[1], pk[3] - pk[4]
+        ok = jnp.isfinite(release) & (approach > 1e-12 * sc.velocity)
+        out["restitutions"] = jnp.where(ok, release / jnp.where(ok, approach, 1.0), jnp.nan)
     if ts is not None:
         grid = _derived(stack, sol.ys[int(cfg.save_steps)][:, :n3] * scale)
         grid["t"] = ts

@@ -135,11 +135,13 @@ class _Contacts(eqx.Module):
     scaled time `t_c`, whether the top mass has passed the apex of its flight after its last push (the
     top interface is then frozen: a later landing is a rebound) and its velocity at the latest point
     (scaled, to see it change sign), and the scaled velocities at `t_c`; `energy`: the
-    energy at `t0` and the largest `|E - E(t0)|` so far (J), when audited; `peaks (2, n)`, when audited:
+    energy at `t0` and the largest `|E - E(t0)|` so far (J), when audited; `peaks (5, n)`, when audited:
     each interface's largest contact force at the accepted points of the first cascade (N; the step-sampled
-    peak, low by O(h^2)) and the upper body's velocity (m/s) at the last accepted point before the
-    interface's first contact (its free-flight velocity just before impact), for the per-design pulse
-    of a batched solve without a step history (`hertz_chain.sweep`). Packed into few arrays: each
+    peak, low by O(h^2)), the upper and lower bodies' velocities (m/s) at the last accepted point
+    before the interface's first contact, and at the first accepted point after that contact (NaN
+    until then): in free flight their differences are the approach and separation speeds, which
+    gravity does not change between two falling bodies; for the per-design results of a batched solve
+    without a step history (`hertz_chain.sweep`). Packed into few arrays: each
     array is a separate operation in every step of the loop.
     """
 
@@ -165,7 +167,8 @@ class _Contacts(eqx.Module):
             c = _Contacts(jnp.broadcast_to(jnp.asarray([-1.0] + [0.0] * (cols - 1)), d.shape + (cols,)),
                           active & False, jnp.concatenate([jnp.zeros(4), v_top[None], ys[n : 2 * n]]),
                           None if e is None else (e, 0.0 * e),
-                          None if e is None else jnp.stack([0.0 * d, v]))
+                          None if e is None else jnp.stack([0.0 * d, v, jnp.concatenate([jnp.zeros(1, v.dtype), v[:-1]]),
+                                                            jnp.nan * d, jnp.nan * d]))
         was_over, top_done = c.cascade[0] > 0, c.cascade[3] > 0
         frozen = was_over | ((jnp.arange(n) == n - 1) & top_done)
         left = c.now & ~active
@@ -189,8 +192,11 @@ class _Contacts(eqx.Module):
         if e is not None:  # elementwise, not `.at[].max`: a scatter is a slow unfused operation in the loop
             e = (c.energy[0], jnp.maximum(c.energy[1], jnp.abs(e - c.energy[0])))
             f = jnp.where(active, stack.forces(d, dd, q), 0.0)
+            never = rows[:, 0] < 0  # not yet in contact: the velocities just before the first contact
+            first_off = left & jnp.isnan(c.peaks[3])  # the first point after the first contact
             peaks = jnp.stack([jnp.where(frozen, c.peaks[0], jnp.maximum(c.peaks[0], f)),
-                               jnp.where(rows[:, 0] < 0, v, c.peaks[1])])
+                               jnp.where(never, v, c.peaks[1]), jnp.where(never, v_lo, c.peaks[2]),
+                               jnp.where(first_off, v, c.peaks[3]), jnp.where(first_off, v_lo, c.peaks[4])])
         return _Contacts(rows, now, cascade, e, peaks)
 
 

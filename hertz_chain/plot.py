@@ -184,7 +184,8 @@ def plot_sweep(store: str | Path, path: str | Path, *, x: str, y: str | None = N
 
 
 VARIABLE_NAMES = ("status", "top_velocity_gain", "velocity_gains", "rigid_gain", "rigid_deficit", "energy_error",
-                  "num_steps", "t_final", "peak_force", "top_peak_g", "top_delta_v", "top_equivalent_half_sine")
+                  "num_steps", "t_final", "peak_force", "top_peak_g", "top_delta_v", "top_equivalent_half_sine",
+                  "restitution")
 
 
 def _label(ds, name: str) -> str:

@@ -282,6 +282,7 @@ def simulate_batch(
         scales=out["scales"], stack=stacks, state=states,
         peak_forces=np_(out["peak_forces"]) if "peak_forces" in out else None,
         impact_velocities=np_(out["impact_velocities"]) if "impact_velocities" in out else None,
+        restitutions=np_(out["restitutions"]) if "restitutions" in out else None,
     )
 
 

@@ -25,7 +25,10 @@ Variables (per design): `status` (`hertz_chain.status.Status` codes), `top_veloc
 top pulse without a step history (`BatchSolution.peak_forces`, `impact_velocities`: running values kept
 by the solver): `peak_force` per interface (N), `top_peak_g` (the top interface's peak force over the
 top mass, in g: the accelerometer's peak), `top_delta_v` (launch velocity minus the velocity just before
-the top's first contact, m/s) and `top_equivalent_half_sine` (`π ΔV / (2 a_peak)`, s). The peaks are the
+the top's first contact, m/s) and `top_equivalent_half_sine` (`π ΔV / (2 a_peak)`, s), and `restitution`
+per interface (its first contact's separation over approach speed, paper Eq 2, read at the steps around
+it in free flight: exact between two falling bodies, within g h of the step against the ground; NaN
+without a finished contact). The peaks are the
 largest values at the solver's accepted steps: low by O(h²) of the step (about 2e-4 relative at the
 default tolerance; `hertz-chain simulate` of one design refines them).
 """
@@ -70,9 +73,10 @@ VARIABLES = {  # name -> (units, long name)
     "top_peak_g": ("1", "peak of the top mass's accelerometer (a + g), in units of standard gravity (9.80665 m s-2)"),
     "top_delta_v": ("m s-1", "velocity change of the top mass: launch velocity minus its velocity before its first contact"),
     "top_equivalent_half_sine": ("s", "duration of the half-sine with the top pulse's peak and velocity change"),
+    "restitution": ("1", "effective restitution of the interface's first contact: separation over approach speed"),
 }
 #: the extra dimension of a per-mass or per-interface variable
-_EXTRA_DIM = {"velocity_gains": "mass", "peak_force": "interface"}
+_EXTRA_DIM = {"velocity_gains": "mass", "peak_force": "interface", "restitution": "interface"}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -391,7 +395,8 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
     out = {"status": sol.status_code.astype(np.int8), "top_velocity_gain": gains[:, -1], "velocity_gains": gains,
            "rigid_gain": rigid, "rigid_deficit": gains[:, -1] / rigid - 1.0, "energy_error": sol.energy_error,
            "num_steps": sol.num_steps.astype(np.int64), "t_final": sol.t_final,
-           "peak_force": sol.peak_forces, "top_peak_g": peak_a / G0, "top_delta_v": dv, "top_equivalent_half_sine": eq_hs}
+           "peak_force": sol.peak_forces, "top_peak_g": peak_a / G0, "top_delta_v": dv, "top_equivalent_half_sine": eq_hs,
+           "restitution": sol.restitutions}
     if plan.dims == ("design",):
         out["values"] = V
     out = {k: np.asarray(v)[:B] for k, v in out.items()}
@@ -400,7 +405,7 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
 
         out["status"] = np.where(valid, out["status"], np.int8(Status.FAILED)).astype(np.int8)
         for k in ("top_velocity_gain", "velocity_gains", "rigid_gain", "rigid_deficit", "energy_error", "t_final",
-                  "peak_force", "top_peak_g", "top_delta_v", "top_equivalent_half_sine"):
+                  "peak_force", "top_peak_g", "top_delta_v", "top_equivalent_half_sine", "restitution"):
             out[k] = np.where(valid.reshape((-1,) + (1,) * (out[k].ndim - 1)), out[k], np.nan)
         out["num_steps"] = np.where(valid, out["num_steps"], 0)
     return out
