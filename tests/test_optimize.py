@@ -8,6 +8,7 @@ for the gradients; the half-sine target of MIL-STD-883 Method 2002 condition B (
 
 import json
 import math
+import tomllib
 import types
 
 import jax
@@ -379,3 +380,23 @@ def test_a_search_cut_short_exits_3_and_still_reports_its_best_point(tmp_path, c
     assert res["status"] == "not converged" and res["convergence"]["why"]
     assert err.count("\n") == 1 and err.startswith("hertz-chain: optimize not converged: ")
     assert out.exists() and res["masses"] == [1.0, 0.1]
+
+
+def test_a_peak_force_limit_stops_the_drop_speed_where_johnson_says(tmp_path):
+    """One 0.1 kg mass on an elastic Hertz ground (k = 1e9 N/m^1.5, g = 0), the drop speed varied in
+    [0.5, 3] m/s for a pulse whose peak target (10,000 g) cannot be met under max_peak_force = 3 kN and
+    whose duration target is the equivalent half-sine at the force limit: the optimum is the speed at
+    which the peak force equals the limit, Johnson's F = k (5 m v^2 / (4 k))^(3/5) solved for v:
+    v* = sqrt(4 k / (5 m) (F / k)^(5/3)) = 2.2361 m/s (closed form), the constraint active."""
+    m, k, F = 0.1, 1e9, 3000.0
+    v_star = math.sqrt(4 * k / (5 * m) * (F / k) ** (5 / 3))
+    duration = math.pi * m * v_star / F  # pi dV / (2 a) with dV = 2 v*, a = F / m
+    doc = {"drop": {"impact_velocity": "1 m/s", "gravity": 0}, "stack": {"masses": [m]},
+           "contact": {"law": "hertz", "stiffness": "1e9 N/m^1.5"},
+           "optimize": {"objective": "pulse", "target_peak_g": 10000, "target_duration": f"{duration * 1e3!r} ms",
+                        "max_peak_force": "3 kN", "starts": 1, "screen": 0,
+                        "vary": [{"key": "drop.impact_velocity", "bounds": ["0.5 m/s", "3 m/s"]}]}}
+    result = optimize(_write(tmp_path, doc))
+    assert result.status.ok and result.convergence["method"] == "COBYQA"
+    speed = float(tomllib.loads(result.document())["drop"]["impact_velocity"])
+    assert speed == pytest.approx(v_star, rel=1e-3)  # measured 1.5e-4 (COBYQA's constraint tolerance)
