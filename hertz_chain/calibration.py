@@ -183,12 +183,12 @@ def _restitution_small_chi(x: float) -> float:
     """e(chi) for small chi: solve h(x) = h(-y), y in (0, x), scaled by x^2; e = y/x."""
     if x == 0.0:
         return 1.0
-    hx = _h(x)
-    y = brentq(lambda y: (hx - _h(-y)) / (x * x), 0.0, x, xtol=1e-300, rtol=4 * np.finfo(float).eps)
+    hx = _z_minus_log1p(x)
+    y = brentq(lambda y: (hx - _z_minus_log1p(-y)) / (x * x), 0.0, x, xtol=1e-300, rtol=4 * np.finfo(float).eps)
     return y / x
 
 
-def _h(z: float) -> float:
+def _z_minus_log1p(z: float) -> float:
     """``z - ln(1 + z)`` without cancellation for small ``|z|`` (series below 0.1)."""
     if abs(z) >= 0.1:
         return z - math.log1p(z)
@@ -211,7 +211,7 @@ def _chi_exact_cached(e: float) -> float:
     # g = [h(x) - h(-e x)] / x^2 -> (1 - e^2)/2 > 0 as x -> 0 (stable form, no cancellation),
     # and g -> -inf as x -> 1/e.
     def g(x: float) -> float:
-        return (_h(x) - _h(-e * x)) / (x * x)
+        return (_z_minus_log1p(x) - _z_minus_log1p(-e * x)) / (x * x)
 
     hi = (1.0 / e) * (1.0 - 1e-16)
     lo = 1e-3 * (1.0 - e)

@@ -462,7 +462,8 @@ def mvg_optimal_n(R, e, *, n_limit: int = 100_000):
     return best if best.ndim else int(best)
 
 
-def _h(x: float, e: float) -> float:
+def _stationarity(x: float, e: float) -> float:
+    """`h(x) = ln(1+x) − ln(1+e) − x ln x/(1+x)`: zero at the optimal pair ratio (`pb_x0`)."""
     return np.log1p(x) - np.log1p(e) - x * np.log(x) / (1 + x)
 
 
@@ -479,7 +480,7 @@ def pb_x0(e):
     """
     e = _check_e_below_one(e)
     uniq, inv = np.unique(e.ravel(), return_inverse=True)
-    roots = np.array([brentq(_h, 1e-300, 1.0, args=(float(ei),), xtol=1e-300, rtol=4 * np.finfo(float).eps,
+    roots = np.array([brentq(_stationarity, 1e-300, 1.0, args=(float(ei),), xtol=1e-300, rtol=4 * np.finfo(float).eps,
                              maxiter=500) for ei in uniq])
     out = roots[inv].reshape(e.shape)
     return out if out.ndim else float(out)
