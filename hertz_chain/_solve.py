@@ -155,14 +155,16 @@ def _outputs(stack: Stack, sc: Scales, scale, core: dict, until: str = "cascade"
     )
 
 
-def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, full: bool = True):
+def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, launch_only: bool = False):
+    """One solve's outputs (`_outputs`) and, unless `launch_only` (`launch_velocity`'s path: no energy
+    audit, no step history, no grid), the scales, the step history or the audit's results, and the grid."""
     n3 = stack.state_size
     sc, scale, y0s, t1s = _setup(stack, state, t_max, cfg)
     sol = _diffeqsolve(stack, y0s, t1s, scale, sc.time, None if ts is None else ts / sc.time, cfg,
-                       history=cfg.save_steps, audit=full and not cfg.save_steps)
+                       history=cfg.save_steps, audit=not launch_only and not cfg.save_steps)
     contacts = sol.solver_state[1]
     out = _outputs(stack, sc, scale, _core(sol), cfg.until)
-    if not full:
+    if launch_only:
         return out
     out["scales"] = sc
     if cfg.save_steps:  # derived quantities and the energy audit: `_history`, on the rows actually used

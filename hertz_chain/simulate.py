@@ -292,7 +292,7 @@ def _launch_impl(stack, state, t_max, cfg, replay: bool):
         frozen = jax.lax.stop_gradient((t1s, scale, sc.time))  # the end time and the scales carry no gradient
         out = _outputs(stack, sc, scale, _replayed_solve((stack, y0s), *frozen, cfg))
     else:
-        out = _solve_impl(stack, state, None, t_max, cfg, full=False)
+        out = _solve_impl(stack, state, None, t_max, cfg, launch_only=True)
     v = eqx.error_if(
         out["launch_velocities"], out["status"] > Status.COMPLETE_WITH_REBOUNDS,
         "hertz_chain.launch_velocity: the cascade did not end (t_max or max_steps reached, no contact, "
