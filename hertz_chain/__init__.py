@@ -97,6 +97,7 @@ _EXPORTS = {
     "launch_velocity": "simulate",
     "restitution": "simulate",
     "simulate_impact": "simulate",
+    "prepare_launch": "simulate",
     "simulate": "simulate",
     "simulate_batch": "simulate",
     "ShockResponseSpectrum": "srs",
@@ -214,6 +215,7 @@ if TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
         launch_velocity,
         restitution,
         simulate_impact,
+        prepare_launch,
         simulate,
         simulate_batch,
     )
