@@ -598,7 +598,8 @@ def fit(
     except HertzChainError as exc:
         _fail(str(exc))
     for note in result.fitted.notes:
-        typer.echo(f"hertz-chain: note: {_one_line(note)}", err=True)
+        if note not in result.notes:  # the table has printed those
+            typer.echo(f"hertz-chain: note: {_one_line(note)}", err=True)
     if not result.status.ok:
         typer.echo(f"hertz-chain: fit {result.status.text}: {_one_line(result.message)}; the last point is "
                    "reported", err=True)

@@ -435,10 +435,10 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
     else:
         f_lo, f_hi = min(100.0, 0.1 / D) / step, max(1e4, 20.0 / D) * step
     cap = 0.1 / h
-    if f_hi > cap:
+    if f_hi / step > cap * (1 + 1e-12):
         notes.append(f"SRS band capped at {cap:.6g} Hz (a tenth of the measurement's {1 / h:.6g} Hz sample rate), "
                      f"below the {f_hi / step:.6g} Hz asked for")
-        f_hi = cap
+    f_hi = min(f_hi, cap)
     freqs = octave_frequencies(f_lo, f_hi, opts.per_octave)
     unit = G0 if opts.kind == "acceleration" else 1.0  # g; a pseudo-velocity from m/s² is in m/s
     kw = dict(peak=opts.peak, kind=opts.kind)

@@ -220,3 +220,14 @@ def test_compare_follows_the_files_srs_section(files, tmp_path):
     ref = pyyeti_srs.srs(a * G0, 1e6, np.asarray(s["frequencies_Hz"]), 20.0, ic="zero", stype="pvelo", peak="abs",
                          time="total", rolloff="none", parallel="no")
     np.testing.assert_allclose(s["measured"], np.abs(np.ravel(ref)), rtol=1e-6)
+
+
+def test_srs_cap_note_only_when_the_band_is_cut(files, report, tmp_path):
+    """The band asked for reaches 20/D ~ 73 kHz (D ~ 0.27 ms): a 1 MHz record (a tenth: 100 kHz) covers it
+    without a note; a 400 kHz record (40 kHz) cuts it, and the note says so."""
+    c = compare(report, read_pulse_csv(files / "clean.csv"))
+    assert not any("capped" in n for n in c.notes) and c.srs_frequencies_Hz[-1] >= 20 / c.measured_metrics.duration_10
+    t, a = hertz_drop(fs=4e5)
+    np.savetxt(tmp_path / "slow.csv", np.c_[t, a], delimiter=",", header="time (s), acceleration (g)", comments="")
+    c = compare(report, read_pulse_csv(tmp_path / "slow.csv"))
+    assert any("capped at 40000 Hz" in n for n in c.notes) and c.srs_frequencies_Hz[-1] <= 4e4
