@@ -104,8 +104,8 @@ class DesignMap:
         for j, cs in self.contacts.items():
             if LAWS[cs.law].memory or LAWS[cs.law].params:
                 why = "keeps a plastic memory" if LAWS[cs.law].memory else "has further parameters"
-                raise StackFileError(f"{section}: contact law {cs.law!r} (interface {j}) {why}; optimize and "
-                                     "sweep do not support it yet (simulate does)")
+                raise StackFileError(f"{section}: contact law {cs.law!r} (interface {j}) {why}; optimize, "
+                                     "sweep and fit do not support it yet (simulate does)")
         k = np.full(n, math.nan)
         for j, cs in self.contacts.items():
             k[j] = _stiffness(spec, cs, j, n)

@@ -334,13 +334,14 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
     if isinstance(measured, (str, Path)):
         measured = read_pulse_csv(measured)
 
-    start_report = run_spec(spec)
-    opts = srs_options(spec)
-    start = compare(start_report, measured, cfc=cfc, align=align, srs_options=opts)
     t, m, notes = prepare_record(measured, cfc)
     if cfc is not None:
         m = cfc_filter(t, m, cfc)
-    model = _Model(spec, slots, t, m, cfc)
+    try:
+        model = _Model(spec, slots, t, m, cfc)  # the design map: no solve yet
+    except StackFileError as exc:
+        msg = str(exc).replace("optimize.vary", "fit.vary")
+        raise StackFileError(msg if msg.startswith(str(path)) or msg.startswith(Path(path).name) else f"{path}: {msg}") from None
     x0 = np.asarray(model.dm.values(), dtype=float)
     lo, hi = [], []
     for s, b, x in zip(slots, bounds, x0):
@@ -351,6 +352,9 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
         lo.append(b[0])
         hi.append(b[1])
     lo_a, hi_a = np.array(lo), np.array(hi)
+    start_report = run_spec(spec)
+    opts = srs_options(spec)
+    start = compare(start_report, measured, cfc=cfc, align=align, srs_options=opts)
     log = np.array([KEYS[s.key].log for s in slots])
     width = start.measured_metrics.duration_10  # the shift's unit in the search
 
