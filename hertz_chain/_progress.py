@@ -41,7 +41,12 @@ def progress(task: str, delay: float | None = None, stream=None):
         yield
         return
     if delay is None:
-        delay = float(os.environ.get("HERTZ_CHAIN_PROGRESS_DELAY", DELAY_S))
+        try:  # a malformed setting falls back to the default: a status line must never stop a run
+            delay = float(os.environ.get("HERTZ_CHAIN_PROGRESS_DELAY", DELAY_S))
+        except ValueError:
+            delay = DELAY_S
+        if not delay >= 0:
+            delay = DELAY_S
     t0 = time.perf_counter()
     done = threading.Event()
     shown = threading.Event()

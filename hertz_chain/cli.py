@@ -473,8 +473,8 @@ def check(
         typer.echo(f"hertz-chain: {status.text}: the run did not complete; the check is of a partial pulse", err=True)
         raise typer.Exit(code=status.exit_code)
     if result.passed is None:
-        typer.echo("hertz-chain: note: nothing was judged (no tolerance or band given): the values are reported "
-                   "only", err=True)
+        typer.echo("hertz-chain: note: nothing was judged (no tolerance, band or SRS tolerance given): the values "
+                   "are reported only", err=True)
     elif not result.passed:
         raise typer.Exit(code=EXIT_CHECK_FAILED)
 
@@ -600,6 +600,9 @@ def fit(
     for note in result.fitted.notes:
         if note not in result.notes:  # the table has printed those
             typer.echo(f"hertz-chain: note: {_one_line(note)}", err=True)
+    if result.poor:
+        typer.echo("hertz-chain: warning: poor fit (see the POOR FIT notes): the values above are not a calibration",
+                   err=True)
     if not result.status.ok:
         typer.echo(f"hertz-chain: fit {result.status.text}: {_one_line(result.message)}; the last point is "
                    "reported", err=True)

@@ -116,12 +116,19 @@ class FitResult:
             "parameters": [p.to_dict() for p in self.parameters],
             "shift_s": self.shift, "shift_standard_error_s": self.shift_standard_error,
             "rms_residual_g": self.rms_residual_g, "samples": self.samples, "dof": self.dof,
+            "poor_fit": self.poor,
             "correlation": self.correlation.tolist(), "evaluations": self.evaluations, "seconds": self.seconds,
             "sprague_geers": {"start": sg(self.start), "fitted": sg(self.fitted)},
             "peak_g": {"measured": self.fitted.measured_metrics.peak_g, "start": self.start.model_metrics.peak_g,
                        "fitted": self.fitted.model_metrics.peak_g},
             "notes": list(self.notes),
         }
+
+    @property
+    def poor(self) -> bool:
+        """True when a note says the fit is poor (worse than the start, a residual over 10 % of the peak,
+        or a standard error not below its value)."""
+        return any(n.startswith("POOR FIT") for n in self.notes)
 
     def table(self) -> str:
         """The result as a text table."""
@@ -419,6 +426,13 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
     if cfc is not None:
         notes.append(f"the CFC {cfc} filter correlates neighbouring samples: the standard errors assume "
                      "independent errors and are too small")
+    if any("resampled" in n for n in notes):
+        notes.append("the record was resampled: its interpolation error counts as noise, and neighbouring "
+                     "residuals are correlated; the standard errors assume independent errors and are too small")
+    for q in params:
+        if not q.standard_error < abs(q.value):
+            notes.append(f"POOR FIT: {q.label}'s standard error ({q.standard_error:.3g}) is not below its value "
+                         f"({q.value:.6g}): the record does not determine it")
     if any(q.at_bound for q in params):
         notes.append("a parameter ended on its bound: its standard error is not meaningful there")
 
@@ -426,7 +440,8 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
     out = copy.deepcopy(doc)
     for s, v in zip(slots, x):
         if s.key in ("contact.stiffness", "contact.restitution"):
-            _set_interface(out, s.index, s.key.split(".")[1], float(v))
+            unit = _unit(spec, s)
+            _set_interface(out, s.index, s.key.split(".")[1], float(v) if unit == "1" else f"{float(v)!r} {unit}")
         elif s.key == "stack.masses" or s.key == "stack.gaps":
             arr = np.asarray(model.dm.fields(x)[s.key], dtype=float)
             out.setdefault("stack", {})[s.key.split(".")[1]] = [float(a) for a in arr]
@@ -435,7 +450,7 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
             drop = out.setdefault("drop", {})
             drop.pop("height", None)
             drop.pop("impact_velocity", None)
-            drop[s.key.split(".")[1]] = float(v)
+            drop[s.key.split(".")[1]] = f"{float(v)!r} {_unit(spec, s)}"
     import tomli_w
 
     from .stackfile import parse_stack
@@ -443,6 +458,16 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
     text = tomli_w.dumps(out)
     fitted_report = run_spec(parse_stack(tomllib.loads(text)))
     fitted = compare(fitted_report, measured, cfc=cfc, shift=float(shift), srs_options=opts)
-    return FitResult(tuple(params), float(shift), float(se_theta[-1] * width), float(math.sqrt(float(r @ r) / N)), N,
+    rms = float(math.sqrt(float(r @ r) / N))
+    peak = fitted.measured_metrics.peak_g
+    if fitted.sprague_geers[2] > start.sprague_geers[2] * (1 + 1e-9):
+        notes.append(f"POOR FIT: the fitted stack matches the record worse than the file's (Sprague-Geers C "
+                     f"{start.sprague_geers[2]:.4f} -> {fitted.sprague_geers[2]:.4f}): check the units, the "
+                     "varied parameters and their bounds")
+    if rms > 0.1 * peak:
+        notes.append(f"POOR FIT: the rms residual ({rms:.4g} g) is {100 * rms / peak:.0f} % of the measured peak "
+                     f"({peak:.5g} g): the model does not reproduce the record (check the units, the varied "
+                     "parameters, the stack)")
+    return FitResult(tuple(params), float(shift), float(se_theta[-1] * width), rms, N,
                      dof, corr, status, message, model.evaluations, time.perf_counter() - t0, start, fitted,
                      "# fitted by hertz-chain fit\n" + text, tuple(notes))

@@ -396,8 +396,8 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
     h_model = top.duration_10
     if h_model < 2 * h:
         raise ParameterError(f"{measured.source or 'measured'}: sample interval", f"{h * 1e3:.6g} ms",
-                             f"shorter than half the model's pulse ({h_model * 1e3:.4g} ms between its 10 % points): "
-                             "check the time unit (header or --time-unit)")
+                             f"at most half the model's pulse ({h_model * 1e3:.4g} ms between its 10 % points; this "
+                             "interval is longer): check the time unit (header or --time-unit)")
 
     def model_on(times):
         inside = (times >= sol_t[0]) & (times <= sol_t[-1])
@@ -417,6 +417,11 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
     meas = m_u
     if cfc is not None:
         meas, model = cfc_filter(t, meas, cfc), cfc_filter(t, model, cfc)
+    if not np.any(model):
+        raise ParameterError(f"{measured.source or 'measured'}: time window",
+                             f"[{t[0] * 1e3:.6g}, {t[-1] * 1e3:.6g}] ms",
+                             f"a record that holds the model's pulse ({top.duration_10 * 1e3:.4g} ms between its 10 % "
+                             "points; the model reads zero on this window): check the time unit (header or --time-unit)")
     meas_pm, model_pm = pulse_metrics(t, meas), pulse_metrics(t, model)
     ratio = meas_pm.duration_10 / top.duration_10
     if not 0.1 <= ratio <= 10:

@@ -146,13 +146,18 @@ def plot_sweep(store: str | Path, path: str | Path, *, x: str, y: str | None = N
             elif np.all(v >= 0):
                 setter("symlog", linthresh=pos.min())
 
+    # a per-mass or per-interface variable is drawn for the top mass / the top mass's interface
+    own = [d for d in da.dims if d in ("mass", "interface")]
+    if own:
+        da = da.isel({d: -1 for d in own})
+        title += "; " + ", ".join(f"{d} {int(ds[d][-1])} (the top)" for d in own)
     if "design" in ds.dims:
         if y is None:
             ax.plot(ds[x], da, ".", ms=3)
-            ax.set(xlabel=_label(ds, x), ylabel=var)
+            ax.set(xlabel=_label(ds, x), ylabel=_label(ds, var))
         else:
             sc = ax.scatter(ds[x], ds[y], c=da, s=6)
-            fig.colorbar(sc, ax=ax, label=var)
+            fig.colorbar(sc, ax=ax, label=_label(ds, var))
             ax.set(xlabel=_label(ds, x), ylabel=_label(ds, y))
             scale(y, ax.set_yscale)
         scale(x, ax.set_xscale)
@@ -171,14 +176,17 @@ def plot_sweep(store: str | Path, path: str | Path, *, x: str, y: str | None = N
                 ax.legend(fontsize="small")
             else:
                 ax.plot(ds[x], da, marker="o", ms=3)
-            ax.set(xlabel=_label(ds, x), ylabel=var)
+            ax.set(xlabel=_label(ds, x), ylabel=_label(ds, var))
         else:
             mesh = ax.pcolormesh(ds[x], ds[y], da.transpose(y, x), shading="nearest")
-            fig.colorbar(mesh, ax=ax, label=var)
+            fig.colorbar(mesh, ax=ax, label=_label(ds, var))
             ax.set(xlabel=_label(ds, x), ylabel=_label(ds, y))
             scale(y, ax.set_yscale)
         scale(x, ax.set_xscale)
-    ax.set_title(title, fontsize="small")
+    import textwrap
+
+    ax.set_title("\n".join(textwrap.wrap(title, 90)), fontsize="small")
+    ax.grid(True, which="both", alpha=0.4)
     fig.savefig(path, dpi=120, format="png")
     plt.close(fig)
 
@@ -213,14 +221,20 @@ def plot_check(result, path: str | Path) -> None:
     a_g = result.a / G0
     if a_g[np.argmax(np.abs(a_g))] < 0:
         a_g = -a_g
-    nom = nominal_pulse(spec.shape, spec.peak_g, spec.duration, result.t - result.nominal_start)
+    # the nominal pulse and its band over their whole support, also where the record does not reach
+    # (the pulse reads zero outside the record: free flight)
+    span = spec.duration + (spec.fall_time or 0.0)
+    rel = np.union1d(result.t - result.nominal_start, np.linspace(-0.05 * span, 1.05 * span, 801))
+    a_g = np.interp(rel, result.t - result.nominal_start, a_g, left=0.0, right=0.0)
+    t = rel * 1e3
+    nom = nominal_pulse(spec.shape, spec.peak_g, spec.duration, rel)
     if spec.srs is not None:
         fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 5), constrained_layout=True)
         _check_srs_panel(bx, result)
     else:
         fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
     if spec.band is not None:
-        lo, hi = band_limits(spec, result.t - result.nominal_start)
+        lo, hi = band_limits(spec, rel)
         ax.fill_between(t, lo, hi, color="0.85", label=f"band ±{spec.band:g} A")
     ax.plot(t, nom, "k--", lw=1, label=f"nominal {spec.shape}, {spec.peak_g:g} g, {spec.duration * 1e3:g} ms")
     ax.plot(t, a_g, color="C3", lw=1.6, label="top pulse (model)")
@@ -252,7 +266,8 @@ def _check_srs_panel(bx, result) -> None:
     curves = [(got, "top pulse (model)", "C3", "-"), (req, "required", "k", "--")]
     if spec.srs_tolerance_db is not None:
         lo, hi = spec.srs_tolerance_db
-        curves += [(req * 10 ** (lo / 20), f"{lo:+g} dB", "0.5", ":"), (req * 10 ** (hi / 20), f"{hi:+g} dB", "0.5", ":")]
+        curves += [(req * 10 ** (lo / 20), f"lower limit {lo:+g} dB", "0.45", ":"),
+                   (req * 10 ** (hi / 20), f"upper limit {hi:+g} dB", "0.45", "-.")]
     _srs_panel(bx, f, curves)
     bx.set_ylabel(f"maximax SRS (g), Q = {spec.srs_q:g}")
 

@@ -318,7 +318,8 @@ class CheckResult:
             out.append(f"  {c.name:<16} {what + ' ' if what else ''}{c.value:.5g} {c.unit}{nominal} {rng}{margin} "
                        f"{verdict}".rstrip())
         out.append(f"result: {self.verdict}" + (" (no tolerance given: add test.peak_tolerance, "
-                                                 "duration_tolerance, velocity_tolerance or band)"
+                                                 "duration_tolerance, velocity_tolerance, band, or srs with "
+                                                 "srs_tolerance_db)"
                                                  if self.passed is None else ""))
         out.extend(f"note: {n}" for n in self.notes)
         return "\n".join(out)

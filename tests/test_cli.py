@@ -216,3 +216,6 @@ def test_progress_lines_only_when_asked_off_a_terminal(monkeypatch):
     lines = [ln for ln in loud.stderr.splitlines() if ln.startswith("hertz-chain: simulating")]
     assert len(lines) == 2 and "compiles" in lines[0] and "done in" in lines[1]
     assert json.loads(loud.stdout)["top_velocity_gain"] == json.loads(quiet.stdout)["top_velocity_gain"]
+    monkeypatch.setenv("HERTZ_CHAIN_PROGRESS_DELAY", "abc")  # a malformed setting never stops a run
+    odd = runner.invoke(app, ["simulate", str(NORMATIVE), "--json"])
+    assert odd.exit_code == 0 and odd.exception is None

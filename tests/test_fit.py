@@ -141,3 +141,12 @@ def test_fit_section_with_bounds(files, tmp_path):
     p.write_text(START + '[[fit.vary]]\nkey = "drop.impact_velocity"\n')
     with pytest.raises(StackFileError, match="fit.vary\\[0\\].bounds: missing"):
         hc.fit(p, files / "clean.csv")
+
+
+def test_a_fit_that_cannot_match_says_so(files):
+    """Only the restitution varied while the stiffness stays 3.3x too low: the record cannot be matched
+    (the pulse is too long whatever e is); the result says POOR FIT (rms residual over 10 % of the peak)
+    instead of passing for a calibration."""
+    r = hc.fit(files / "start.toml", files / "clean.csv", ["contact.restitution[0]"])
+    assert r.poor and any(n.startswith("POOR FIT") and "rms residual" in n for n in r.notes)
+    assert r.to_dict()["poor_fit"] is True
