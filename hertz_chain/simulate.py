@@ -342,13 +342,20 @@ def launch_velocity(
     `until`: `"cascade"` (default) or `"launch"` (stop as soon as the top mass's launch is final, as for
     `simulate`: the top's entry is exact, the others are the velocities at that time).
     """
-    tolerances = tolerances or Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True)
     replay = isinstance(adjoint, str) and adjoint == "reverse"
+    t_max, cfg = _launch_config(stack, state, solver, tolerances, t_max, max_steps, adjoint, until)
+    return _launch_jit(stack, state, t_max, cfg, replay)
+
+
+def _launch_config(stack, state, solver, tolerances, t_max, max_steps, adjoint, until):
+    """`(t_max, cfg)` of a launch solve: `launch_velocity`'s defaults (rtol = atol = 1e-11 with the onset
+    proxies), its `until` values, the checks of `_prepare`."""
+    tolerances = tolerances or Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True)
     if until not in ("cascade", "launch"):
-        raise ParameterError("until", until, "'cascade' or 'launch' (launch_velocity stops at the cascade's end)")
+        raise ParameterError("until", until, "'cascade' or 'launch' (a launch solve stops at the cascade's end)")
     _, t_max, cfg = _prepare(stack, state, None, t_max, solver, tolerances, max_steps, adjoint, save_steps=False,
                              until=until)
-    return _launch_jit(stack, state, t_max, cfg, replay)
+    return t_max, cfg
 
 
 def prepare_launch(
@@ -377,11 +384,7 @@ def prepare_launch(
     another structure; a solve that does not end raises at run time (`eqx.error_if`), as in
     `launch_velocity`.
     """
-    tolerances = tolerances or Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True)
-    if until not in ("cascade", "launch"):
-        raise ParameterError("until", until, "'cascade' or 'launch' (a launch stops at the cascade's end)")
-    _, t_max_, cfg = _prepare(stack, state, None, t_max, solver, tolerances, max_steps, "reverse", save_steps=False,
-                              until=until)
+    t_max_, cfg = _launch_config(stack, state, solver, tolerances, t_max, max_steps, "reverse", until)
     all_leaves, tree = jax.tree_util.tree_flatten((stack, state))
     is_array = [eqx.is_array(x) for x in all_leaves]
     others = [x for x, a in zip(all_leaves, is_array) if not a]
