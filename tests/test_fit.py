@@ -150,3 +150,17 @@ def test_a_fit_that_cannot_match_says_so(files):
     r = hc.fit(files / "start.toml", files / "clean.csv", ["contact.restitution[0]"])
     assert r.poor and any(n.startswith("POOR FIT") and "rms residual" in n for n in r.notes)
     assert r.to_dict()["poor_fit"] is True
+
+
+def test_the_shipped_example_record_is_what_its_header_says():
+    """examples/measured_drop.csv (for examples/fit_drop.toml) is `measurement(0.01)` of this file, written
+    to 9 digits: its header's description of the truth holds."""
+    from pathlib import Path
+
+    from hertz_chain.measured import read_pulse_csv
+
+    root = Path(__file__).resolve().parents[1]
+    rec = read_pulse_csv(root / "examples" / "measured_drop.csv")
+    t, a, _ = measurement(0.01)
+    np.testing.assert_allclose(rec.t, t, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(rec.a / G, a, rtol=1e-8, atol=1e-7)
