@@ -19,6 +19,7 @@ _EXPORTS = {
     "RigidComparison": "analysis",
     "analyse": "analysis",
     "independence": "analysis",
+    "wave_speed": "analysis",
     "accelerometer": "analysis",
     "cfc_filter": "filters",
     "Comparison": "measured",

@@ -139,6 +139,8 @@ def _outputs(stack: Stack, sc: Scales, scale, core: dict, until: str = "cascade"
     t_end_if = _end_of_contacts(stack, c, sc.time, t_c)
     t_end, v_launch = _launch(stack, c, sc.time, t_end_if, t_c, v_c)
     status = core["status"]
+    # a chain held by an end force never flies apart: its run ends at t_max by design (until="t_max")
+    status = jnp.where((status == Status.INCOMPLETE_T_MAX) & (stack.end_force > 0), Status.COMPLETE, status)
     status = jnp.where(jnp.all(jnp.isfinite(y_fin)) | (status == Status.INCOMPLETE_MAX_STEPS), status,
                        Status.FAILED)
     return dict(

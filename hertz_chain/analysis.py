@@ -41,7 +41,7 @@ from .srs import (DEFAULT_PPC, ShockResponseSpectrum, SRSOptions, _active_sample
                   resample_uniform, srs)
 from .status import Status
 
-__all__ = ["INDEPENDENT_BELOW", "RigidComparison", "Report", "analyse", "independence"]
+__all__ = ["INDEPENDENT_BELOW", "RigidComparison", "Report", "analyse", "independence", "wave_speed"]
 
 #: Largest overlap fraction of neighbouring contacts still called "independent" (1 %).
 INDEPENDENT_BELOW = 0.01
@@ -96,6 +96,7 @@ class Report:
     solution: object = dataclasses.field(repr=False, default=None)
     peak_velocities: np.ndarray | None = None  # (n,) each mass's largest upward velocity in the first cascade
     peak_velocity_times: np.ndarray | None = None  # (n,) and when (Hermite-refined with the accelerations)
+    wave_speed: float = float("nan")  # contacts per second along the chain, + toward the top (`wave_speed`)
 
     @property
     def top_pulse(self) -> PulseMetrics | None:
@@ -337,6 +338,11 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     rigid = _rigid_comparison(sol, e_meas, nominal_restitution, v_ref)
     regime = "independent" if ind < INDEPENDENT_BELOW else "overlapping"
     peak_t, peak_v = _peak_velocities(st, sol.cascade_end_time)
+    strongest: dict[int, ContactEpisode] = {}
+    for ep in episodes:
+        if ep.interface not in strongest or ep.peak_force > strongest[ep.interface].peak_force:
+            strongest[ep.interface] = ep
+    speed = wave_speed([strongest[j].peak_force_time if j in strongest else np.nan for j in range(n)])
     return Report(
         status=sol.status,
         drop_speed=v_ref,
@@ -363,7 +369,32 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
         solution=sol,
         peak_velocities=peak_v,
         peak_velocity_times=peak_t,
+        wave_speed=speed,
     )
+
+
+def wave_speed(peak_times) -> float:
+    """The speed of a wave along the chain (contacts per second; > 0 travelling up, from mass 1 toward
+    the top mass; < 0 travelling down), from the time `t_j` of the peak force of every interface `j`.
+
+    It is the least-squares slope of `j` against `t_j` over the middle half of the interfaces that
+    have a peak (from a quarter to three quarters of the way along, away from where a wave forms and
+    where it reflects; Nesterenko's solitary wave takes about five beads to form), at least four of
+    them, whose times must be strictly monotone in `j` (one wave passing). NaN otherwise. For a chain
+    of equal spheres of diameter `D` the speed in m/s is `D` times this (the contacts are `D` apart).
+    Nesterenko (2001, "Dynamics of heterogeneous materials", Springer) gives the solitary
+    wave's speed `V_s ~ v_m^{1/5}` (docs/granular-chains.md)."""
+    t = np.asarray(peak_times, dtype=float)
+    j = np.nonzero(np.isfinite(t))[0]
+    lo, hi = len(j) // 4, len(j) - len(j) // 4
+    j = j[lo:hi]
+    if len(j) < 4:
+        return float("nan")
+    dt = np.diff(t[j])
+    if not (np.all(dt > 0) or np.all(dt < 0)):
+        return float("nan")
+    tc = t[j] - t[j].mean()
+    return float(np.sum(tc * (j - j.mean())) / np.sum(tc**2))
 
 
 def _peak_velocities(st, t_end) -> tuple[np.ndarray, np.ndarray]:
@@ -397,6 +428,10 @@ def _warnings(sol, e_meas, e_nom, regime, tolerances) -> list[str]:
     if not np.max(np.abs(np.asarray(sol.state.velocities))) > 0:
         out.append("the stack starts at rest: no drop speed, so no gain is defined; the launch velocities "
                    "are in the JSON (launch_velocities_mps)")
+    f0 = float(np.asarray(sol.stack.end_force))
+    if f0 > 0:
+        out.append(f"a chain held by an end force ({f0:g} N) never flies apart: its 'launch' velocities and gains "
+                   "are the velocities at t_max, and the rigid comparison does not apply")
     if np.isfinite(sol.energy_error) and sol.energy_error > ENERGY_WARN:
         out.append(f"energy audit: |E(t) - E(0)| reached {sol.energy_error:.2e} of the drop energy "
                    f"(> {ENERGY_WARN:g}): tighten solver.rtol/atol")

@@ -15,7 +15,9 @@ comparison) and the solver options. It resolves, in this order:
    interface (paper Eqs 1–2 applied down the cascade, `rigid.cascade_velocities`), so that the
    nominal restitution holds where the rigid model expects the impact to happen.
 4. **Initial state**: explicit velocities, a preloaded resting stack dropped at the impact speed
-   (`stack.resting`), or the impact state with the given gaps (`stack.at_impact`).
+   (`stack.resting`; the preload is the weight above each contact plus `stack.end_force`, and a
+   precompressed chain may start with explicit velocities), or the impact state with the given gaps
+   (`stack.at_impact`).
 """
 
 from __future__ import annotations
@@ -207,15 +209,23 @@ def _build(spec: StackSpec) -> Built:
         radius = _effective_radius(spec, cs, j, n) if LAWS[cs.law].needs_radius else None
         with _section(spec, cs, j):
             laws[j] = _law(cs, stiffness[j], float(m_eff[j]), v_c, radius)
-    stack = Stack(m, [laws[j] for j in interfaces], gravity=g, ground=ground)
     bodies = spec.stack
-    if bodies.velocities is not None:
+    stack = Stack(m, [laws[j] for j in interfaces], gravity=g, ground=ground, end_force=bodies.end_force)
+    if bodies.preload:
+        # static equilibrium under gravity and the end force (a precompressed chain), then either the
+        # file's velocities or a drop at the impact speed with the preload kept (mass 1 just touching)
+        rest = resting(stack)
+        v = spec.drop.impact_velocity or 0.0
+        if bodies.velocities is not None:
+            state = State(rest.positions, v0)
+        elif v > 0:
+            state = State(rest.positions - rest.positions[0], np.full(n, -v))
+        else:
+            state = rest
+    elif bodies.velocities is not None:
         gaps = np.asarray(bodies.gap_list(n), dtype=float)
         x = np.concatenate([[0.0], np.cumsum(gaps)])
         state = State(x, v0)
-    elif bodies.preload:
-        v = spec.drop.impact_velocity or 0.0
-        state = resting(stack, height=v**2 / (2 * g))
     else:
         state = at_impact(stack, spec.drop.impact_velocity, np.asarray(bodies.gap_list(n), dtype=float))
     s = spec.solver

@@ -101,6 +101,7 @@ def to_dict(report: Report) -> dict:
         "launch_velocities_mps": _nums(report.launch_velocities),
         "peak_velocities_mps": None if report.peak_velocities is None else _nums(report.peak_velocities),
         "peak_velocity_times_s": None if report.peak_velocity_times is None else _nums(report.peak_velocity_times),
+        "wave_speed_per_s": _num(report.wave_speed),
         "top_efficiency": _num(report.top_efficiency),
         "rigid": {
             "nominal_gain": _num(rigid.nominal_gain),
@@ -217,6 +218,10 @@ def summary_table(report: Report, title: str | None = None) -> str:
         lines.append(f"top SRS (Q = {s_.Q:g}{what}): max {value} at {s_.frequencies_Hz[k]:,.0f} Hz")
     lines.append(f"regime: {r.regime} (neighbouring contacts overlap {r.independence:.1%} of the "
                  "shorter contact time; the rigid theory assumes 0%)")
+    if np.isfinite(r.wave_speed):
+        way = "up, toward the top mass" if r.wave_speed > 0 else "down, toward mass 1"
+        lines.append(f"wave: {abs(r.wave_speed):,.6g} contacts/s {way} (peak-force times of the middle half of "
+                     "the chain; x bead diameter = m/s)")
     if r.rebounds:
         lines.append("")
         lines.append(f"rebounds after the first cascade (kept out of the gains): {len(r.rebounds)}")

@@ -96,6 +96,11 @@ class Stack(eqx.Module):
     - `gravity`: gravitational acceleration in m/s² (default standard gravity), `>= 0`; acts downward.
     - `ground`: whether interface 0 (a rigid, immovable ground at `x = 0`) exists. Without it the stack is
       the free chain of the paper's Section 3.
+    - `end_force`: a constant force `F0 >= 0` (N) on the top mass, pushing it toward mass 1 (downward),
+      as a dead weight or a preloaded spring at the far end of a granular chain does (default 0). It
+      needs the ground (something must hold the chain against it). `resting` puts such a chain in
+      static equilibrium (every contact carries `F0` plus the weight above it: a precompressed chain).
+      A chain held by an end force never flies apart: simulate it with `until="t_max"`.
 
     Laws of one type are stored as one vectorised law (`laws[g]` serves the interfaces `groups[g]`), so the
     vector field costs one call per law type, whatever `n`.
@@ -104,6 +109,7 @@ class Stack(eqx.Module):
     masses: Array
     laws: tuple[AbstractContactLaw, ...]
     gravity: Array
+    end_force: Array
     ground: bool = eqx.field(static=True)
     groups: tuple[tuple[int, ...], ...] = eqx.field(static=True)
 
@@ -114,9 +120,11 @@ class Stack(eqx.Module):
         *,
         gravity: ArrayLike = STANDARD_GRAVITY,
         ground: bool = True,
+        end_force: ArrayLike = 0.0,
     ):
         masses = jnp.asarray(masses, dtype=float)
         gravity = jnp.asarray(gravity, dtype=float)
+        end_force = jnp.asarray(end_force, dtype=float)
         if masses.ndim != 1:
             raise ParameterError("masses", masses, "a 1-D array of masses (kg), bottom first")
         n = masses.shape[0]
@@ -131,6 +139,14 @@ class Stack(eqx.Module):
             g = float(gravity)
             if not (np.isfinite(g) and g >= 0):
                 raise ParameterError("gravity", g, "finite and >= 0 (m/s², acting downward)")
+        if _is_concrete(end_force):
+            f0 = np.asarray(end_force)
+            if f0.ndim != 0 or not (np.isfinite(f0) and f0 >= 0):
+                raise ParameterError("end_force", f0.tolist(), "a finite number >= 0 (N, pushing the top mass "
+                                     "toward mass 1)")
+            if float(f0) > 0 and not ground:
+                raise ParameterError("end_force", float(f0), "0 without the ground (nothing holds the chain "
+                                     "against it)")
         interfaces = list(range(0 if ground else 1, n))
         if isinstance(laws, AbstractContactLaw):
             shapes = {jnp.shape(leaf) for leaf in jax.tree.leaves(laws)}
@@ -154,6 +170,7 @@ class Stack(eqx.Module):
         self.masses = masses
         self.laws = stacked
         self.gravity = gravity
+        self.end_force = end_force
         self.ground = bool(ground)
         self.groups = groups
 
@@ -296,8 +313,10 @@ class Stack(eqx.Module):
         return jnp.where(self.clamped(), self.forces(delta, delta_dot, q) > 0, delta > 0)
 
     def accelerations(self, forces: Array) -> Array:
-        """`(..., n)` accelerations of the masses (m/s², upward) from the interface forces."""
-        above = jnp.concatenate([forces[..., 1:], jnp.zeros_like(forces[..., :1])], axis=-1)
+        """`(..., n)` accelerations of the masses (m/s², upward) from the interface forces, gravity and the
+        end force on the top mass."""
+        above = jnp.concatenate([forces[..., 1:], jnp.broadcast_to(self.end_force[..., None], forces[..., :1].shape)],
+                                axis=-1)
         return (forces - above) / self.masses - self.gravity
 
     # ---------------------------------------------------------------- dynamics
@@ -325,11 +344,12 @@ class Stack(eqx.Module):
         return jnp.concatenate(parts, axis=-1)
 
     def energies(self, y: Array) -> dict[str, Array]:
-        """Kinetic, gravitational (zero at `x = 0`), elastic and dissipated energy (J) of a state."""
+        """Kinetic, gravitational (zero at `x = 0`; with the end force's potential `F0 x_n`), elastic and
+        dissipated energy (J) of a state."""
         x, v, diss = self.split(y)
         return dict(
             kinetic=0.5 * jnp.sum(self.masses * v**2, axis=-1),
-            gravitational=self.gravity * jnp.sum(self.masses * x, axis=-1),
+            gravitational=self.gravity * jnp.sum(self.masses * x, axis=-1) + self.end_force * x[..., -1],
             elastic=jnp.sum(self.potentials(self.overlaps(x), self.memory(y)), axis=-1),
             dissipated=jnp.sum(diss, axis=-1),
         )
@@ -343,6 +363,7 @@ class Stack(eqx.Module):
         """
         x, v, diss = self.split(y)
         mech = self.masses * (0.5 * v**2 + self.gravity[..., None] * x)
+        mech = mech.at[..., -1].add(self.end_force * x[..., -1])
         return jnp.sum(jnp.concatenate([mech, self.potentials(self.overlaps(x), self.memory(y)), diss], axis=-1),
                        axis=-1)
 
@@ -443,9 +464,11 @@ def invert_monotone(fn, target: Array, iterations: int = 40) -> Array:
 
 
 def resting(stack: Stack, height: ArrayLike = 0.0) -> State:
-    """Initial state (c): a touching stack (zero gaps) in static equilibrium under gravity.
+    """Initial state (c): a touching stack (zero gaps) in static equilibrium under gravity and the end
+    force (a precompressed chain).
 
-    Interface `j` carries the weight of the masses above it, `W_j = g sum_{i > j} m_i`, so its preload
+    Interface `j` carries the weight of the masses above it and the end force `F0` on the top mass,
+    `W_j = g sum_{i > j} m_i + F0`, so its preload
     overlap solves `F^el_j(delta_j) = W_j` (Hertz: `delta_j = (W_j/k)^{2/3}`), found by `invert_monotone`
     for any law.
 
@@ -462,7 +485,7 @@ def resting(stack: Stack, height: ArrayLike = 0.0) -> State:
         raise ParameterError("height", float(h), "finite and >= 0 (m)")
     m, g = stack.masses, stack.gravity
     above = jnp.cumsum(m[::-1])[::-1]  # above[i] = sum_{k >= i} m_k
-    weight = g * above  # interface j (index j) carries the masses j+1..n (indices j..n-1)
+    weight = g * above + stack.end_force  # interface j (index j) carries the masses j+1..n and F0
     mask = (weight > 0) & stack.interface_mask()
     w_safe = jnp.where(mask, weight, 1.0)
     # masked entries solve d = 1 instead (finite values and gradients: the double-where trick)

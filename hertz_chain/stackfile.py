@@ -107,7 +107,7 @@ SRS_MAX_SPAN = 1e5
 # `hertz_chain.standards` and `hertz_chain.fit` (docs/optimize.md, docs/sweeps.md,
 # docs/lab-workflow.md); simulating such a file runs its base stack
 _DROP_KEYS = ("ground", "impact_velocity", "height", "gravity")
-_STACK_KEYS = ("masses", "design", "gaps", "velocities", "preload", "material", "radius", "shape")
+_STACK_KEYS = ("masses", "design", "gaps", "velocities", "preload", "end_force", "material", "radius", "shape")
 _DESIGN_KEYS = ("kind", "n", "restitution", "bottom_mass", "top_mass", "mass_ratio")
 _GROUND_KEYS = ("material", "shape", "radius")
 _MATERIAL_KEYS = ("youngs_modulus", "poisson_ratio", "density")
@@ -177,7 +177,8 @@ class BodiesSpec:
     Exactly one of `masses` (kg, bottom first) and `design` is set. Per-body and per-gap values are
     a single value (the same for all; always so when the number of masses is not known yet) or a
     tuple with one entry per mass (per gap for `gaps`, n−1 entries); use the `*_list(n)` methods to
-    get tuples. `gaps` in m; `velocities` in m/s, upward-positive, or `None`; `radius` in m
+    get tuples. `gaps` in m; `velocities` in m/s, upward-positive, or `None`; `end_force` in N (a
+    constant force on the top mass toward mass 1; `preload` then defaults to true); `radius` in m
     (`inf` for a flat face) or `None`; `shape` `"sphere"`/`"flat"` or `None`; `material` names or
     `None`.
     """
@@ -190,6 +191,7 @@ class BodiesSpec:
     material: str | tuple[str, ...] | None = None
     radius: float | tuple[float, ...] | None = None
     shape: str | tuple[str, ...] | None = None
+    end_force: float = 0.0
 
     @property
     def n(self) -> int | None:
@@ -784,8 +786,11 @@ def _parse_stack(raw: Any, default_restitution: float | None) -> BodiesSpec:
             raise _error("stack.velocities", f"has {len(v)} entries, expected {n} (one per mass)")
         velocities = tuple(parse_quantity(x, "velocity", f"stack.velocities[{i}]") for i, x in enumerate(v))
 
-    preload = _bool(t["preload"], "stack.preload") if "preload" in t else False
-    if preload and any(g != 0 for g in (gaps if isinstance(gaps, tuple) else (gaps,))):
+    end_force = _non_negative(t["end_force"], "stack.end_force", "force") if "end_force" in t else 0.0
+    touching = all(g == 0 for g in (gaps if isinstance(gaps, tuple) else (gaps,)))
+    # an end force precompresses the chain: it starts in static equilibrium unless the file says otherwise
+    preload = _bool(t["preload"], "stack.preload") if "preload" in t else (end_force > 0 and touching)
+    if preload and not touching:
         raise _error("stack.preload", "needs touching masses (stack.gaps = 0)")
 
     material = _per_item(t["material"], "stack.material", n, _name) if "material" in t else None
@@ -798,7 +803,7 @@ def _parse_stack(raw: Any, default_restitution: float | None) -> BodiesSpec:
     if "shape" in t:
         shape = _per_item(t["shape"], "stack.shape", n, lambda x, k: _choice(x, k, SHAPES))
     shape, radius = _geometry(shape, radius, t, "stack")
-    return BodiesSpec(masses, design, gaps, velocities, preload, material, radius, shape)
+    return BodiesSpec(masses, design, gaps, velocities, preload, material, radius, shape, end_force)
 
 
 def _geometry(shape, radius, t: Mapping, path: str):
@@ -1021,8 +1026,13 @@ def _build(data: Mapping) -> StackSpec:
                 "velocities",
             )
         ground = None
-    if bodies.preload and gravity == 0:
-        raise _error("stack.preload", "a static preload needs gravity, but drop.gravity = 0")
+    if bodies.preload and gravity == 0 and bodies.end_force == 0:
+        raise _error("stack.preload", "a static preload needs gravity or stack.end_force, but drop.gravity = 0 "
+                     "and there is no end force")
+    if bodies.end_force > 0:
+        if ground is None:
+            raise _error("stack.end_force", f"{bodies.end_force:g} N needs drop.ground = true (a wall at mass 1 "
+                         "that holds the chain against it)")
 
     # --- interface numbers against the number of masses
     if n is not None:
@@ -1051,6 +1061,9 @@ def _build(data: Mapping) -> StackSpec:
     _check_curved(contacts, bodies, ground, overrides, n)
 
     solver = _parse_solver(top["solver"]) if "solver" in top else SolverSpec()
+    if bodies.end_force > 0 and solver.until != "t_max":
+        raise _error("solver.until", f"'{solver.until}' with stack.end_force: a chain held by an end force "
+                     "never flies apart; set solver.until = \"t_max\" and solver.t_max")
     if solver.max_steps is not None and n is not None:
         need = run_memory(n, solver.max_steps)
         _check(need <= MAX_RUN_MEMORY, "solver.max_steps", solver.max_steps,

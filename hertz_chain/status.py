@@ -6,7 +6,7 @@ command line reads it before anything heavy is imported.
 
 | status | meaning | headline results | exit code |
 |---|---|---|---|
-| `complete` | the first cascade ended (every contact open, no neighbours approach, mass 1 moves up from the ground or rests on it) | valid | 0 |
+| `complete` | the first cascade ended (every contact open, no neighbours approach, mass 1 moves up from the ground or rests on it); for a chain held by an end force (`Stack.end_force`), which never flies apart, the run reached `t_max` | valid | 0 |
 | `complete with rebounds` | as `complete`; the run went on (`until="t_max"`) and saw later impacts, reported on their own | valid | 0 |
 | `incomplete: t_max reached` | `t_max` came before the cascade ended | partial | 3 |
 | `incomplete: max_steps reached` | the step budget ran out before the cascade ended | partial | 3 |

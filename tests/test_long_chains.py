@@ -112,3 +112,35 @@ def test_solitary_wave_speed_follows_nesterenkos_one_fifth_power():
     assert speed2 / ((k / m) ** 0.4 * vm2**0.2) == pytest.approx(0.9075, abs=1e-4)
     v_end = np.asarray(_wave_times.last.launch_velocities)[:2] / 2.0
     np.testing.assert_allclose(v_end, [-0.07109, -0.03027], atol=1e-5)
+
+
+def test_report_wave_speed_is_nesterenkos_solitary_wave():
+    # The report's wave speed (least squares over the middle half's peak-force times) on the same chain:
+    # Nesterenko's exact 1/5-power similarity between two strikes, and 0.9075 (k/m)^{2/5} v_m^{1/5}
+    # (docs/references.md, "Stacks and chains"; 4 digits given), travelling up from the struck mass 1.
+    m, k, n = 0.0045, 1.2e10, 40
+    speeds = []
+    for v0 in (0.5, 2.0):
+        stack = hc.Stack(np.full(n, m), hc.Hertz(k), gravity=0.0, ground=False)
+        v = np.zeros(n)
+        v[0] = v0
+        sol = hc.simulate(stack, hc.State(np.zeros(n), v), tolerances=hc.Tolerances(rtol=1e-11, atol=1e-11),
+                          max_steps=200_000)
+        r = hc.analyse(sol)
+        assert r.wave_speed > 0
+        assert r.wave_speed / ((k / m) ** 0.4 * r.peak_velocities[20] ** 0.2) == pytest.approx(0.9075, abs=1e-4)
+        speeds.append(r.wave_speed)
+    assert speeds[1] / speeds[0] == pytest.approx(4.0**0.2, rel=1e-6)
+    from hertz_chain.report import to_dict
+
+    assert to_dict(r)["wave_speed_per_s"] == r.wave_speed
+
+
+def test_wave_speed_needs_one_monotone_wave():
+    # a wave down a chain of 12 contacts, 1 ms per contact: -1000 contacts/s exactly (a straight line)
+    t = 1e-3 * np.arange(12)[::-1]
+    assert hc.wave_speed(t) == pytest.approx(-1000.0, rel=1e-12)
+    t_up = 1e-3 * np.arange(12)
+    t_up[5] = t_up[7]  # two contacts of the middle half peak out of order: no single wave
+    assert np.isnan(hc.wave_speed(t_up))
+    assert np.isnan(hc.wave_speed([0.0, 1.0, 2.0, np.nan]))  # too few contacts

@@ -1,0 +1,143 @@
+"""Chain end conditions (issue 21): an end force `F0` on the top mass and the precompressed chain in
+static equilibrium that it makes.
+
+References:
+
+- Hertz's law `F = k delta^{3/2}` carrying the end force and the weight above: the static overlaps
+  `delta_j = ((F0 + g sum_{i > j} m_i)/k)^{2/3}` (closed form);
+- the small oscillation of one bead pressed onto a wall by `F0`: the linearised contact stiffness
+  `k_1 = dF/d delta = (3/2) k delta_0^{1/2}`, so the period is `2 pi sqrt(m/k_1)` (the frequency's
+  correction is second order in the amplitude over `delta_0`, 1e-3 here);
+- an independent scipy integration (`solve_ivp`, DOP853, rtol 1e-12), written here, of a precompressed
+  Hertz chain under gravity whose top bead is struck: Newton's equations with the wall, the contacts,
+  gravity and the end force, from the closed-form equilibrium above.
+"""
+
+import numpy as np
+import pytest
+import tomli_w
+from scipy.integrate import solve_ivp
+
+import hertz_chain as hc
+from hertz_chain.errors import ParameterError, StackFileError
+
+G = hc.G0
+TOL = hc.Tolerances(rtol=1e-11, atol=1e-11)
+
+
+def _file(tmp_path, doc, name="chain.toml"):
+    p = tmp_path / name
+    p.write_text(tomli_w.dumps(doc))
+    return p
+
+
+def _chain_doc(n=8, f0="2 N", striker="-0.05 m/s", t_max="0.4 ms"):
+    """A vertical chain of n equal beads on a wall, pressed by `f0` on the top bead, gravity on (the
+    default), the top bead struck downward at `striker` (the rest start at rest)."""
+    return {"drop": {}, "stack": {"masses": ["4.5 g"] * n, "gaps": 0, "end_force": f0,
+                                  "velocities": [0] * (n - 1) + [striker]},
+            "contact": {"law": "hertz", "stiffness": "1.2e10 N/m^1.5"},
+            "solver": {"until": "t_max", "t_max": t_max, "rtol": 1e-11, "atol": 1e-11}}
+
+
+def test_resting_chain_carries_end_force_and_weight_closed_form():
+    m = np.array([0.3, 0.2, 0.1, 0.05])
+    k, f0 = 2e9, 7.0
+    stack = hc.Stack(m, hc.Hertz(k), gravity=G, end_force=f0)
+    x = np.asarray(hc.resting(stack).positions)
+    load = f0 + G * np.array([m.sum(), m[1:].sum(), m[2:].sum(), m[3:].sum()])
+    np.testing.assert_allclose(x, -np.cumsum((load / k) ** (2 / 3)), rtol=1e-13)
+    # Newton: no net force on any mass (the end force included)
+    a = np.asarray(stack.vector_field(0.0, hc.resting(stack).flat())[4:8])
+    np.testing.assert_allclose(a, 0.0, atol=1e-12 * G)
+
+
+def test_one_bead_pressed_on_a_wall_oscillates_at_the_linearised_hertz_frequency():
+    m, k, f0 = 0.01, 1e9, 5.0
+    d0 = (f0 / k) ** (2 / 3)
+    k1 = 1.5 * k * np.sqrt(d0)
+    omega = np.sqrt(k1 / m)
+    v0 = 1e-3 * d0 * omega  # amplitude 1e-3 of the static overlap
+    stack = hc.Stack([m], hc.Hertz(k), gravity=0.0, end_force=f0)
+    rest = hc.resting(stack)
+    period = 2 * np.pi / omega
+    ts = np.linspace(0.0, 3 * period, 3001)
+    sol = hc.simulate(stack, hc.State(rest.positions, [-v0]), ts=ts, t_max=3 * period, until="t_max",
+                      tolerances=TOL)
+    assert sol.status is hc.Status.COMPLETE  # a held chain's run ends at t_max by design
+    v = np.asarray(sol.grid.velocities)[:, 0]
+    up = np.nonzero((v[:-1] < 0) & (v[1:] >= 0))[0]  # upward zero crossings, linear between samples
+    t_up = ts[up] - v[up] * (ts[up + 1] - ts[up]) / (v[up + 1] - v[up])
+    assert len(t_up) == 3
+    assert np.diff(t_up) == pytest.approx(period, rel=1e-5)
+    assert abs(sol.energy_error) < 1e-9
+
+
+def _scipy_chain(m, k, f0, g, v_top, t_eval):
+    """Independent reference: the precompressed Hertz chain on a wall, written out (positions upward,
+    x_1 = -delta_0 on the wall), from the closed-form equilibrium, top bead struck at `v_top`."""
+    n = len(m)
+    load = f0 + g * np.cumsum(m[::-1])[::-1]
+    delta = (load / k) ** (2 / 3)
+    x0 = -np.cumsum(delta)
+    v_init = np.zeros(n)
+    v_init[-1] = v_top
+
+    def rhs(_, y):
+        x, v = y[:n], y[n:]
+        d = np.concatenate([[-x[0]], x[:-1] - x[1:]])
+        f = k * np.maximum(d, 0.0) ** 1.5
+        above = np.concatenate([f[1:], [f0]])
+        return np.concatenate([v, (f - above) / m - g])
+
+    out = solve_ivp(rhs, (0.0, t_eval[-1]), np.concatenate([x0, v_init]), method="DOP853", rtol=1e-12,
+                    atol=1e-20, t_eval=t_eval)
+    return out.y[n:].T
+
+
+def test_precompressed_chain_from_a_stack_file_matches_an_independent_scipy_solve(tmp_path):
+    n, m, k, f0, v_top = 8, 4.5e-3, 1.2e10, 2.0, -0.05
+    built = hc.build(hc.load_stack_file(_file(tmp_path, _chain_doc(n))))
+    assert built.stack.n == n and float(built.stack.end_force) == f0 and float(built.stack.gravity) == G
+    ts = np.linspace(0.0, 4e-4, 41)
+    sol = hc.simulate(built.stack, built.state, ts=ts, **built.simulate_options)
+    assert sol.status is hc.Status.COMPLETE
+    ref = _scipy_chain(np.full(n, m), k, f0, G, v_top, ts)
+    np.testing.assert_allclose(np.asarray(sol.grid.velocities), ref, rtol=0, atol=1e-8 * abs(v_top))
+    assert abs(sol.energy_error) < 1e-8  # the end force's work F0 x_n is in the audit
+
+
+def test_end_force_bad_input_is_one_line(tmp_path):
+    doc = _chain_doc()
+    doc["solver"] = {}
+    with pytest.raises(StackFileError, match=r"solver\.until.*end_force.*t_max"):
+        hc.load_stack_file(_file(tmp_path, doc))
+    doc = _chain_doc()
+    doc["drop"] = {"ground": False}
+    with pytest.raises(StackFileError, match=r"stack\.end_force.*drop\.ground = true"):
+        hc.load_stack_file(_file(tmp_path, doc, "b.toml"))
+    doc = _chain_doc(f0="-1 N")
+    with pytest.raises(StackFileError, match=r"stack\.end_force"):
+        hc.load_stack_file(_file(tmp_path, doc, "c.toml"))
+    doc = _chain_doc(f0="2 m")
+    with pytest.raises(StackFileError, match=r"stack\.end_force.*force"):
+        hc.load_stack_file(_file(tmp_path, doc, "d.toml"))
+    with pytest.raises(ParameterError, match="end_force"):
+        hc.Stack([1.0, 1.0], hc.Hertz(1e9), ground=False, end_force=1.0)
+    with pytest.raises(ParameterError, match="end_force"):
+        hc.Stack([1.0], hc.Hertz(1e9), end_force=-1.0)
+    stack = hc.Stack([1.0], hc.Hertz(1e9), end_force=1.0)
+    with pytest.raises(ParameterError, match="until.*t_max"):
+        hc.simulate(stack, hc.resting(stack))
+
+
+def test_cli_simulates_a_precompressed_chain(tmp_path):
+    from typer.testing import CliRunner
+    import json
+    from hertz_chain.cli import app
+
+    path = _file(tmp_path, _chain_doc(n=4, t_max="0.2 ms"))
+    res = CliRunner().invoke(app, ["simulate", str(path), "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    assert out["status"] == "complete"
