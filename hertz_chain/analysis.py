@@ -272,7 +272,7 @@ def _top_srs(t, a_g, v_g, episodes, top_if, options=None) -> ShockResponseSpectr
 
 
 def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = None,
-            srs_options: SRSOptions | None = None) -> Report:
+            srs_options: SRSOptions | None = None, yield_limits=()) -> Report:
     """Analyse a `hertz_chain.Solution` (see the module docstring for every quantity).
 
     **Arguments:**
@@ -283,6 +283,10 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     - `tolerances`: optional `{"rtol": ..., "atol": ...}` the solve used, for the warnings.
     - `srs_options`: how the top SRS is computed (`hertz_chain.srs.SRSOptions`; the stack file's
       `[srs]`); default maximax absolute acceleration, Q = 10, 1/12 octave, the default band.
+    - `yield_limits`: `materials.YieldLimit`s of the interfaces whose materials have a yield strength
+      (`Built.yield_limits`): an interface with an elastic or viscous law whose peak Hertz pressure
+      (Johnson Eq. 4.24, from its largest contact force) exceeds the yield pressure `1.6 Y` gets a
+      warning: the law's numbers are then an upper bound, the metal yields.
 
     Episodes that start after their interface's last contact of the first cascade
     (`Solution.contact_end_times`) are `rebounds`: listed on their own, kept out of the restitutions,
@@ -365,12 +369,32 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
         t_final=float(sol.t_final),
         cascade_end_time=float(sol.cascade_end_time),
         rebounds=tuple(rebounds),
-        warnings=tuple(_warnings(sol, e_meas, nominal_restitution, regime, tolerances)),
+        warnings=tuple(_warnings(sol, e_meas, nominal_restitution, regime, tolerances)
+                       + _yield_warnings(stack, strongest, yield_limits)),
         solution=sol,
         peak_velocities=peak_v,
         peak_velocity_times=peak_t,
         wave_speed=speed,
     )
+
+
+def _yield_warnings(stack, strongest: dict, yield_limits) -> list[str]:
+    """One line per interface whose law cannot yield (no memory) but whose peak Hertz pressure exceeds
+    the yield pressure of its softer body (`materials.YieldLimit`)."""
+    out = []
+    for lim in yield_limits:
+        ep = strongest.get(lim.interface)
+        if ep is None or type(stack.law_of(lim.interface)).has_memory:
+            continue
+        f = ep.peak_force_refined if np.isfinite(ep.peak_force_refined) else ep.peak_force
+        p0 = float(lim.peak_pressure(f))
+        if p0 > lim.yield_pressure:
+            label = "ground-1" if lim.interface == 0 else f"{lim.interface}-{lim.interface + 1}"
+            out.append(f"interface {label}: peak Hertz pressure {p0 / 1e9:.3g} GPa exceeds the yield pressure "
+                       f"{lim.yield_pressure / 1e9:.3g} GPa (1.6 Y) of {lim.material} by {p0 / lim.yield_pressure:.2g}x:"
+                       " the metal yields, so this elastic/viscous law over-predicts forces and rebound (an upper "
+                       "bound); law = \"thornton\" models the plasticity")
+    return out
 
 
 def wave_speed(peak_times) -> float:

@@ -30,7 +30,14 @@ import numpy as np
 
 from .contact import AbstractContactLaw, make_law
 from .errors import ParameterError, StackFileError
-from .materials import Material, contact_stiffness, effective_radius, material as lookup_material
+from .materials import (
+    Material,
+    YieldLimit,
+    contact_stiffness,
+    effective_modulus,
+    effective_radius,
+    material as lookup_material,
+)
 from .registry import LAWS
 from .rigid import cascade_velocities, met_design, met_mass_ratio, mvg_design
 from .simulate import Tolerances
@@ -58,6 +65,31 @@ class Built:
     n_output: int | None = None
     dt_output: float | None = None
     title: str | None = None
+    yield_limits: tuple[YieldLimit, ...] = ()
+
+
+def _yield_limits(spec: StackSpec, n: int, interfaces) -> dict[int, YieldLimit]:
+    """`YieldLimit` of every interface whose two bodies have materials and radii (a rigid ground counts
+    as a body that does not yield) and one of which has a yield strength."""
+    mats, radii = spec.stack.material_list(n), spec.stack.radius_list(n)
+    if mats is None or radii is None:
+        return {}
+    out = {}
+    for j in interfaces:
+        if j == 0:
+            pair, r = (_material(spec, spec.ground.material), _material(spec, mats[0])), (spec.ground.radius, radii[0])
+        else:
+            pair, r = (_material(spec, mats[j - 1]), _material(spec, mats[j])), (radii[j - 1], radii[j])
+        if math.isinf(r[0]) and math.isinf(r[1]):
+            continue
+        yielding = [mat for mat in pair if mat is not None and mat.yield_pressure is not None]
+        if not yielding:
+            continue
+        soft = min(yielding, key=lambda mat: mat.yield_pressure)
+        R1, R2 = (r[1], r[0]) if math.isinf(r[0]) else r
+        out[j] = YieldLimit(j, effective_modulus(*pair), effective_radius(R1, None if math.isinf(R2) else R2),
+                            soft.yield_pressure, soft.name)
+    return out
 
 
 def design_masses(spec: StackSpec) -> np.ndarray:
@@ -85,7 +117,8 @@ def _material(spec: StackSpec, name: str | None) -> Material | None:
         return None
     inline = spec.material(name)
     if inline is not None:
-        return Material(inline.name, inline.youngs_modulus, inline.poisson_ratio, inline.density)
+        return Material(inline.name, inline.youngs_modulus, inline.poisson_ratio, inline.density,
+                        yield_strength=inline.yield_strength)
     return lookup_material(name)
 
 
@@ -136,10 +169,17 @@ def _effective_radius(spec: StackSpec, cs: ContactSpec, j: int, n: int) -> float
 
 
 def _law(cs: ContactSpec, stiffness: float, m_eff: float, v_c: float | None,
-         radius: float | None = None) -> AbstractContactLaw:
+         radius: float | None = None, limit: YieldLimit | None = None) -> AbstractContactLaw:
+    params = dict(cs.params)
+    for key in LAWS[cs.law].from_materials:  # e.g. thornton's yield_pressure from the softer body's Y
+        if key not in params:
+            if limit is None:
+                raise ParameterError(key, None, "a value in the file, or stack.material with a yield strength "
+                                     "(yield_strength_Pa in the material table or [materials.NAME])")
+            params[key] = limit.yield_pressure
     return make_law(cs.law, stiffness=stiffness, restitution=cs.restitution, effective_mass=m_eff,
                     calibration_velocity=v_c, chi_map=cs.chi_map, alpha=cs.alpha, damping=cs.damping,
-                    clamp=cs.clamp, effective_radius=radius, **dict(cs.params))
+                    clamp=cs.clamp, effective_radius=radius, **params)
 
 
 def _nominal_e(cs: ContactSpec, stiffness: float, m_eff: float) -> float:
@@ -199,6 +239,7 @@ def _build(spec: StackSpec) -> Built:
             e_nom[j] = _nominal_e(cs, stiffness[j], float(m_eff[j]))
     speeds = _approach_speeds(m, e_nom, ground, v0)
     laws: list[AbstractContactLaw | None] = [None] * n
+    limits = _yield_limits(spec, n, interfaces)
     for j, cs in specs.items():
         v_c = cs.calibration_velocity
         if v_c is None and LAWS[cs.law].speed_dependent and cs.restitution is not None:
@@ -208,7 +249,7 @@ def _build(spec: StackSpec) -> Built:
                                      f"impact at interface {j}; give a calibration_velocity")
         radius = _effective_radius(spec, cs, j, n) if LAWS[cs.law].needs_radius else None
         with _section(spec, cs, j):
-            laws[j] = _law(cs, stiffness[j], float(m_eff[j]), v_c, radius)
+            laws[j] = _law(cs, stiffness[j], float(m_eff[j]), v_c, radius, limits.get(j))
     bodies = spec.stack
     stack = Stack(m, [laws[j] for j in interfaces], gravity=g, ground=ground, end_force=bodies.end_force)
     if bodies.preload:
@@ -238,5 +279,6 @@ def _build(spec: StackSpec) -> Built:
     if s.until != "cascade":
         options["until"] = s.until
     return Built(stack=stack, state=state, masses=m, nominal_restitution=e_nom, laws=tuple(laws),
-                 simulate_options=options, n_output=s.n_output, dt_output=s.dt_output, title=spec.title)
+                 simulate_options=options, n_output=s.n_output, dt_output=s.dt_output, title=spec.title,
+                 yield_limits=tuple(limits[j] for j in sorted(limits)))
 

@@ -6,11 +6,16 @@ r"""Materials, contact geometry and Hertz stiffness (plain Python/NumPy, SI unit
   Flat–flat contact is not Hertzian and is refused.
 * Hertz stiffness $k = \tfrac43 E^*\sqrt{R^*}$ (N/m^1.5), so $F = k\delta^{3/2}$ (Johnson 1985, Eq. 4.23).
 * Masses from geometry and density: sphere $\tfrac43\pi r^3\rho$, cylinder/disc $\pi r^2 h\rho$.
+* Peak Hertz pressure $p_0 = (6 F E^{*2}/(\pi^3 R^{*2}))^{1/3}$ (Johnson 1985, Eq. 4.24); first yield
+  under a sphere when $p_0 = 1.60\,Y$ (von Mises, $\nu = 0.3$; Johnson 1985, §6.2), the rule
+  `YIELD_PRESSURE_FACTOR` that turns a yield strength $Y$ into a yield pressure $p_y = 1.6\,Y$.
 
 The material table `hertz_chain/data/materials.csv` (shipped in the wheel; `data/materials.csv` at the
 repository root links to it) has columns ``name,
-youngs_modulus_Pa, poisson_ratio, density_kg_m3, typical_restitution, source``; every row names
-its handbook/datasheet source. The restitution column is **indicative** only (the coefficient of
+youngs_modulus_Pa, poisson_ratio, density_kg_m3, typical_restitution, yield_strength_Pa, source``;
+every row names its handbook/datasheet source. ``yield_strength_Pa`` (0.2 % offset, tension, in the
+condition the row names) is empty where a tensile yield strength says nothing useful about contact
+plasticity (cemented carbide, elastomers). The restitution column is **indicative** only (the coefficient of
 restitution is not a material constant: it depends on speed, size and the partner).
 """
 
@@ -22,9 +27,14 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from .errors import ParameterError
 
 __all__ = [
+    "YIELD_PRESSURE_FACTOR",
+    "hertz_peak_pressure",
+    "YieldLimit",
     "Material",
     "MATERIALS_CSV",
     "material",
@@ -41,6 +51,10 @@ __all__ = [
 ]
 
 MATERIALS_CSV = Path(__file__).resolve().parent / "data" / "materials.csv"
+
+#: `p_y = YIELD_PRESSURE_FACTOR * Y`: the peak Hertz pressure at first yield under a sphere, 1.60 Y for a
+#: von Mises material with nu = 0.3 (Johnson 1985, *Contact Mechanics*, §6.2; 1.57-1.62 over nu = 0.25-0.35).
+YIELD_PRESSURE_FACTOR = 1.6
 
 
 def _number(value, name: str) -> float:
@@ -72,7 +86,8 @@ def _poisson(value, name: str = "poisson_ratio") -> float:
 class Material:
     """An isotropic elastic material (SI units).
 
-    ``typical_restitution`` is indicative only (``None`` if unknown); ``source`` cites the data.
+    ``typical_restitution`` is indicative only (``None`` if unknown); ``yield_strength`` (Pa, ``None``
+    if unknown or not meaningful) gives `yield_pressure`; ``source`` cites the data.
     """
 
     name: str
@@ -81,6 +96,7 @@ class Material:
     density: float | None = None
     typical_restitution: float | None = None
     source: str = ""
+    yield_strength: float | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "youngs_modulus", _positive(self.youngs_modulus, "youngs_modulus"))
@@ -92,6 +108,14 @@ class Material:
             if not (0.0 < e <= 1.0):
                 raise ParameterError("typical_restitution", e, "in (0, 1]")
             object.__setattr__(self, "typical_restitution", e)
+        if self.yield_strength is not None:
+            object.__setattr__(self, "yield_strength", _positive(self.yield_strength, "yield_strength"))
+
+    @property
+    def yield_pressure(self) -> float | None:
+        """$p_y = 1.6 Y$ (Pa; `YIELD_PRESSURE_FACTOR`): the peak Hertz pressure at which a sphere contact on
+        this material first yields; ``None`` without a yield strength."""
+        return None if self.yield_strength is None else YIELD_PRESSURE_FACTOR * self.yield_strength
 
     @property
     def plane_strain_compliance(self) -> float:
@@ -110,6 +134,7 @@ def _load(path: str) -> dict[str, Material]:
         for row in csv.DictReader(fh):
             e = row.get("typical_restitution", "").strip()
             rho = row.get("density_kg_m3", "").strip()
+            sy = (row.get("yield_strength_Pa") or "").strip()
             mat = Material(
                 name=row["name"].strip(),
                 youngs_modulus=float(row["youngs_modulus_Pa"]),
@@ -117,6 +142,7 @@ def _load(path: str) -> dict[str, Material]:
                 density=float(rho) if rho else None,
                 typical_restitution=float(e) if e else None,
                 source=row.get("source", "").strip(),
+                yield_strength=float(sy) if sy else None,
             )
             table[_key(mat.name)] = mat
     return table
@@ -189,6 +215,30 @@ def contact_stiffness(
     """Hertz stiffness of two bodies of materials ``mat1``/``mat2`` (``None``: rigid) and radii of
     curvature ``R1``/``R2`` at the contact (``None`` or ``inf``: flat), N/m^1.5."""
     return hertz_stiffness(effective_modulus(mat1, mat2), effective_radius(R1, R2))
+
+
+def hertz_peak_pressure(force, E_star: float, R_star: float):
+    r"""Peak (central) Hertz pressure $p_0 = (6 F E^{*2}/(\pi^3 R^{*2}))^{1/3}$ (Pa) of a sphere contact
+    carrying ``force`` (N; a number or array), Johnson 1985, Eq. 4.24."""
+    f = np.maximum(np.asarray(force, dtype=float), 0.0)
+    return np.cbrt(6.0 * f * E_star**2 / (math.pi**3 * R_star**2))
+
+
+@dataclass(frozen=True)
+class YieldLimit:
+    """Where an interface first yields: its effective modulus `E*` (Pa) and radius `R*` (m) from the
+    materials and radii, and the yield pressure `p_y = 1.6 Y` (Pa) of the softer body with a yield
+    strength (`material` names it; `materials.YIELD_PRESSURE_FACTOR`)."""
+
+    interface: int
+    modulus: float
+    radius: float
+    yield_pressure: float
+    material: str
+
+    def peak_pressure(self, force):
+        """`hertz_peak_pressure` of this interface at `force` (N)."""
+        return hertz_peak_pressure(force, self.modulus, self.radius)
 
 
 def _density(density: float | str | Material) -> float:

@@ -46,6 +46,8 @@ class LawRow:
       it takes no `restitution`. `params`: the further stack-file keys it needs, as `(key, dimension)`
       (a `stackfile` dimension name), passed to its `from_config` by name; `needs_radius`: it needs the
       interface's effective radius (from `stack.radius`), passed as `effective_radius`.
+      `from_materials`: the keys of `params` that may instead follow from the materials (`yield_pressure`:
+      `p_y = 1.6 Y` of the softer of the two bodies, `materials.YIELD_PRESSURE_FACTOR`).
     """
 
     name: str
@@ -63,6 +65,7 @@ class LawRow:
     memory: bool = False
     params: tuple[tuple[str, str], ...] = ()
     needs_radius: bool = False
+    from_materials: tuple[str, ...] = ()
 
     @property
     def hertzian(self) -> bool:
@@ -117,7 +120,8 @@ LAWS: dict[str, LawRow] = {row.name: row for row in (
     LawRow("power", "PowerLaw", stiffness="power_stiffness", damping="alpha", damping_dimension="inverse_velocity",
            damping_max=1e6, damping_label="alpha, s/m", speed_dependent=True, chi_map=True,
            params=(("exponent", "dimensionless"),)),
-    LawRow("thornton", "Thornton", memory=True, params=(("yield_pressure", "pressure"),), needs_radius=True),
+    LawRow("thornton", "Thornton", memory=True, params=(("yield_pressure", "pressure"),), needs_radius=True,
+           from_materials=("yield_pressure",)),
 )}
 """Contact laws by configuration name (see `LawRow`)."""
 

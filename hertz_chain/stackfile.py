@@ -110,7 +110,7 @@ _DROP_KEYS = ("ground", "impact_velocity", "height", "gravity")
 _STACK_KEYS = ("masses", "design", "gaps", "velocities", "preload", "end_force", "material", "radius", "shape")
 _DESIGN_KEYS = ("kind", "n", "restitution", "bottom_mass", "top_mass", "mass_ratio")
 _GROUND_KEYS = ("material", "shape", "radius")
-_MATERIAL_KEYS = ("youngs_modulus", "poisson_ratio", "density")
+_MATERIAL_KEYS = ("youngs_modulus", "poisson_ratio", "density", "yield_strength")
 _CONTACT_KEYS = (
     "law",
     "stiffness",
@@ -144,13 +144,15 @@ def _expand(value: Any, count: int, what: str) -> tuple:
 class MaterialSpec:
     """A material defined in the file (`[materials.NAME]`).
 
-    `youngs_modulus` in Pa, `poisson_ratio` dimensionless, `density` in kg/m³ (or `None`).
+    `youngs_modulus` in Pa, `poisson_ratio` dimensionless, `density` in kg/m³ (or `None`),
+    `yield_strength` in Pa (or `None`).
     """
 
     name: str
     youngs_modulus: float
     poisson_ratio: float
     density: float | None = None
+    yield_strength: float | None = None
 
 
 @dataclass(frozen=True)
@@ -459,7 +461,8 @@ def _parse_materials(raw: Any) -> tuple[MaterialSpec, ...]:
         nu = parse_quantity(t["poisson_ratio"], "dimensionless", _join(path, "poisson_ratio"))
         _check(-1 < nu <= 0.5, _join(path, "poisson_ratio"), t["poisson_ratio"], "must be in (-1, 0.5]")
         rho = _positive(t["density"], _join(path, "density"), "density") if "density" in t else None
-        out.append(MaterialSpec(str(name), E, nu, rho))
+        sy = _positive(t["yield_strength"], _join(path, "yield_strength"), "pressure") if "yield_strength" in t else None
+        out.append(MaterialSpec(str(name), E, nu, rho, sy))
     return tuple(out)
 
 
@@ -553,6 +556,8 @@ def _resolve_contact(merged: dict, label: str, *, ground: bool) -> ContactSpec:
     clamp = _bool(*merged["clamp"]) if "clamp" in merged else True
     params = []
     for pkey, dim in row.params:  # required further keys of the law, e.g. thornton's yield_pressure
+        if pkey not in merged and pkey in row.from_materials:
+            continue  # from the materials' yield strengths (`build`; `_check_from_materials`)
         if pkey not in merged:
             raise _error(_join(label, pkey), f"missing; law {law!r} needs {pkey} ({_UNITS.get(dim, dim)})")
         raw, key = merged[pkey]
@@ -1059,6 +1064,13 @@ def _build(data: Mapping) -> StackSpec:
                 "caps' radii",
             )
     _check_curved(contacts, bodies, ground, overrides, n)
+    for spec_, label in sections:
+        row = LAWS[spec_.law]
+        given = {k for k, _ in spec_.params}
+        for pkey in row.from_materials:
+            if pkey not in given and bodies.material is None:
+                raise _error(_join(label, pkey), f"missing; law {spec_.law!r} needs {pkey}, or stack.material "
+                             "with a yield strength (p_y = 1.6 Y of the softer body)")
 
     solver = _parse_solver(top["solver"]) if "solver" in top else SolverSpec()
     if bodies.end_force > 0 and solver.until != "t_max":

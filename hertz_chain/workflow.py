@@ -45,7 +45,8 @@ def run_spec(spec: StackSpec) -> Report:
         sol = simulate(built.stack, built.state, ts=ts, **dict(options, t_max=sol.t_final))
     tol = {k: built.simulate_options["tolerances"].__getattribute__(k) for k in ("rtol", "atol")} \
         if built.simulate_options.get("tolerances") is not None else None
-    return analyse(sol, nominal_restitution=built.nominal_restitution, tolerances=tol, srs_options=srs_options(spec))
+    return analyse(sol, nominal_restitution=built.nominal_restitution, tolerances=tol, srs_options=srs_options(spec),
+                   yield_limits=built.yield_limits)
 
 
 def srs_options(spec: StackSpec):

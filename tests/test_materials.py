@@ -27,13 +27,16 @@ def test_csv_columns_and_sources():
     with open(MATERIALS_CSV, newline="", encoding="utf-8") as fh:
         reader = csv.DictReader(fh)
         assert reader.fieldnames == ["name", "youngs_modulus_Pa", "poisson_ratio", "density_kg_m3",
-                                     "typical_restitution", "source"]
+                                     "typical_restitution", "yield_strength_Pa", "source"]
         rows = list(reader)
     assert len(rows) >= 10
     for row in rows:
         assert len(row["source"]) > 20, row["name"]  # every row cites where its numbers come from
         # the restitution column is marked as indicative (not a material constant)
         assert "indicative" in row["source"] or not row["typical_restitution"]
+        # every row says where its yield strength comes from, or why it has none
+        assert "Y: " in row["source"], row["name"]
+        assert bool(row["yield_strength_Pa"]) is ("none given" not in row["source"]), row["name"]
 
 
 @pytest.mark.parametrize(

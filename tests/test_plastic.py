@@ -173,3 +173,73 @@ def test_thornton_needs_its_yield_pressure_and_a_radius(tmp_path):
     p.write_text(tomli_w.dumps(doc))
     with pytest.raises(StackFileError, match=r"contact\.restitution.*not used by law 'thornton'"):
         hc.load_stack_file(p)
+
+
+# ---------------------------------------------------------------- yield from materials (Johnson 1985, §6.2)
+def _soft_sphere_doc(v, law="hertz"):
+    """A 5 mm sphere of an inline material (E = 120 GPa, nu = 0.3, Y = 300 MPa) dropped on a rigid flat at `v`,
+    gravity on (the default)."""
+    contact = {"law": law}
+    return {"drop": {"impact_velocity": f"{v!r} m/s"},
+            "materials": {"alloy": {"youngs_modulus": "120 GPa", "poisson_ratio": 0.3, "density": "8000 kg/m^3",
+                                    "yield_strength": "300 MPa"}},
+            "stack": {"material": "alloy", "radius": "5 mm", "masses": ["4 g"]},
+            "contact": contact}
+
+
+def _alloy_yield_velocity():
+    """Johnson's yield velocity of that sphere on a rigid flat: first yield at p0 = 1.6 Y; the Hertz impact
+    reaches delta_y = R (pi p_y / 2E*)^2 when m V_y^2 / 2 = (2/5) k delta_y^{5/2}."""
+    e_star, r_star, m = 120e9 / (1 - 0.3**2), 5e-3, 4e-3
+    p_y = 1.6 * 300e6
+    k = 4 / 3 * e_star * math.sqrt(r_star)
+    d_y = r_star * (math.pi * p_y / (2 * e_star)) ** 2
+    return math.sqrt(0.8 * k * d_y**2.5 / m), p_y, d_y
+
+
+def test_thornton_takes_its_yield_pressure_from_the_materials(tmp_path):
+    v_y, p_y, d_y = _alloy_yield_velocity()
+    p = tmp_path / "t.toml"
+    doc = _soft_sphere_doc(3 * v_y, law="thornton")
+    doc["drop"]["gravity"] = 0  # V_y is 5 mm/s here: the weight is 5 % of the yield force, so compare without it
+    p.write_text(tomli_w.dumps(doc))
+    built = hc.build(hc.load_stack_file(p))
+    assert float(built.stack.law_of(0).delta_y) == pytest.approx(d_y, rel=1e-12)
+    lim = built.yield_limits[0]
+    assert (lim.interface, lim.material, lim.yield_pressure) == (0, "alloy", pytest.approx(p_y, rel=1e-15))
+    sol = hc.simulate(built.stack, built.state, **built.simulate_options)
+    # Thornton's e(V_y/V_i) on a rigid flat (m* = m)
+    assert sol.launch_velocities[0] / (3 * v_y) == pytest.approx(thornton_closed_form(1 / 3), rel=1e-6)
+    doc = _soft_sphere_doc(1.0, law="thornton")
+    del doc["materials"]["alloy"]["yield_strength"]
+    p.write_text(tomli_w.dumps(doc))
+    with pytest.raises(StackFileError, match=r"yield_pressure.*yield strength"):
+        hc.build(hc.load_stack_file(p))
+    del doc["stack"]["material"]
+    doc["contact"]["stiffness"] = "1e10 N/m^1.5"
+    p.write_text(tomli_w.dumps(doc))
+    with pytest.raises(StackFileError, match=r"contact\.yield_pressure.*missing.*stack\.material"):
+        hc.load_stack_file(p)
+
+
+# gravity on (the default): at V_y = 5 mm/s the weight is ~5 % of the yield force, so the speeds are 0.5 and 2 V_y
+@pytest.mark.parametrize("factor, warned", [(0.5, False), (2.0, True)])
+def test_elastic_law_warns_above_the_yield_velocity(tmp_path, factor, warned):
+    v_y, _, _ = _alloy_yield_velocity()
+    p = tmp_path / "h.toml"
+    p.write_text(tomli_w.dumps(_soft_sphere_doc(factor * v_y)))
+    from hertz_chain.workflow import simulate_file
+
+    report = simulate_file(p)
+    lines = [w for w in report.warnings if "yield pressure" in w]
+    assert bool(lines) is warned
+    if warned:  # p0 / p_y = (F/F_y)^{1/3} = (delta_m/delta_y)^{1/2} = factor^{2/5} (Hertz: delta_m ~ V^{4/5}),
+        # 1.32 without gravity; the weight adds ~1 % to p0 here
+        assert "ground-1" in lines[0] and "alloy" in lines[0] and "by 1.3x" in lines[0]
+
+
+def test_the_table_materials_with_a_yield_strength_give_a_yield_pressure():
+    for name in hc.material_names():
+        mat = material(name)
+        if mat.yield_strength is not None:
+            assert mat.yield_pressure == pytest.approx(1.6 * mat.yield_strength, rel=1e-15)
