@@ -111,6 +111,7 @@ _EXPORTS = {
     "at_impact": "stack",
     "dropped": "stack",
     "resting": "stack",
+    "precompressed": "stack",
     "stack_designs": "stack",
     "simulate_file": "workflow",
     "SweepResult": "sweep",

@@ -51,7 +51,7 @@ def _derived(stack: Stack, y):
     d, dd = stack.overlaps(x), stack.overlap_rates(v)
     f = stack.forces(d, dd, q)
     out = dict(
-        positions=x, velocities=v, accelerations=stack.accelerations(f), overlaps=d,
+        positions=x, velocities=v, accelerations=stack.accelerations(f, x), overlaps=d,
         overlap_rates=dd, forces=f, dissipated=diss, energy=stack.total_energy(y),
     )
     if q is not None:
@@ -140,7 +140,8 @@ def _outputs(stack: Stack, sc: Scales, scale, core: dict, until: str = "cascade"
     t_end, v_launch = _launch(stack, c, sc.time, t_end_if, t_c, v_c)
     status = core["status"]
     # a chain held by an end force never flies apart: its run ends at t_max by design (until="t_max")
-    status = jnp.where((status == Status.INCOMPLETE_T_MAX) & (stack.end_force > 0), Status.COMPLETE, status)
+    held = (stack.end_force > 0) | stack.wall
+    status = jnp.where((status == Status.INCOMPLETE_T_MAX) & held, Status.COMPLETE, status)
     status = jnp.where(jnp.all(jnp.isfinite(y_fin)) | (status == Status.INCOMPLETE_MAX_STEPS), status,
                        Status.FAILED)
     return dict(

@@ -68,6 +68,22 @@ class Built:
     yield_limits: tuple[YieldLimit, ...] = ()
 
 
+def _with_wall(spec: StackSpec, stack: Stack, state: State, laws, interfaces) -> Stack:
+    """The stack with the file's far wall (`[wall]`): stiffness given or from the wall's material and the top
+    mass's (a flat wall); with `stack.end_force` the wall carries it at the precompressed equilibrium of
+    `state` (`stack.precompressed`; no dead load then), else it stands `wall.gap` above the top mass."""
+    w, n, bodies = spec.wall, stack.n, spec.stack
+    k_w = w.stiffness
+    if k_w is None:
+        top = _material(spec, bodies.material_list(n)[-1])
+        k_w = contact_stiffness(top, _material(spec, w.material), bodies.radius_list(n)[-1], None)
+    x_top = float(state.positions[-1])
+    f0 = bodies.end_force
+    x_w = x_top - (f0 / k_w) ** (2.0 / 3.0) if f0 > 0 else x_top + (w.gap or 0.0)
+    return Stack(stack.masses, [laws[j] for j in interfaces], gravity=stack.gravity, ground=stack.ground,
+                 wall_stiffness=k_w, wall_position=x_w)
+
+
 def _yield_limits(spec: StackSpec, n: int, interfaces) -> dict[int, YieldLimit]:
     """`YieldLimit` of every interface whose two bodies have materials and radii (a rigid ground counts
     as a body that does not yield) and one of which has a yield strength."""
@@ -269,6 +285,8 @@ def _build(spec: StackSpec) -> Built:
         state = State(x, v0)
     else:
         state = at_impact(stack, spec.drop.impact_velocity, np.asarray(bodies.gap_list(n), dtype=float))
+    if spec.wall is not None:
+        stack = _with_wall(spec, stack, state, laws, interfaces)
     s = spec.solver
     tol = {k: v for k, v in (("rtol", s.rtol), ("atol", s.atol)) if v is not None}
     options = {"solver": s.solver, "tolerances": Tolerances(**tol)}

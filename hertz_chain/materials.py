@@ -53,7 +53,8 @@ __all__ = [
 MATERIALS_CSV = Path(__file__).resolve().parent / "data" / "materials.csv"
 
 #: `p_y = YIELD_PRESSURE_FACTOR * Y`: the peak Hertz pressure at first yield under a sphere, 1.60 Y for a
-#: von Mises material with nu = 0.3 (Johnson 1985, *Contact Mechanics*, §6.2; 1.57-1.62 over nu = 0.25-0.35).
+#: von Mises (or Tresca) material with nu = 0.3 (Johnson 1985, *Contact Mechanics*, §6.2; the exact on-axis value is
+#: 1.613 at nu = 0.3 and 1.55-1.67 over nu = 0.25-0.35, so the fixed 1.6 is a stated rule, within ~4 % for metals).
 YIELD_PRESSURE_FACTOR = 1.6
 
 

@@ -134,10 +134,9 @@ def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, sa
         raise ParameterError("stack", type(stack).__name__, "a hertz_chain.Stack")
     if not isinstance(state, State):
         raise ParameterError("state", type(state).__name__, "a hertz_chain.State (at_impact, dropped, resting)")
-    f0 = stack.end_force
-    if until != "t_max" and not isinstance(f0, jax.core.Tracer) and np.any(np.asarray(f0) != 0):
-        raise ParameterError("until", until, "'t_max' (with a t_max) for a chain held by an end force: it never "
-                             "flies apart, so no cascade ends")
+    if until != "t_max" and (stack.wall or (not isinstance(stack.end_force, jax.core.Tracer) and stack.held)):
+        raise ParameterError("until", until, "'t_max' (with a t_max) for a chain held by an end force or a wall: "
+                             "it never flies apart, so no cascade ends")
     if not isinstance(max_steps, (int, np.integer)) or max_steps < 1:
         raise ParameterError("max_steps", max_steps, "an integer >= 1")
     tolerances = tolerances or Tolerances()

@@ -42,6 +42,7 @@ __all__ = [
     "at_impact",
     "dropped",
     "resting",
+    "precompressed",
     "stack_designs",
     "invert_monotone",
     "reduced_masses",
@@ -101,6 +102,11 @@ class Stack(eqx.Module):
       needs the ground (something must hold the chain against it). `resting` puts such a chain in
       static equilibrium (every contact carries `F0` plus the weight above it: a precompressed chain).
       A chain held by an end force never flies apart: simulate it with `until="t_max"`.
+    - `wall_stiffness`, `wall_position`: a rigid wall beyond the top mass (the far end of a chain between
+      two walls): an elastic Hertz contact `F_w = k_w <x_n - x_w>^{3/2}` (N) pushing the top mass down,
+      `k_w` in N/m^1.5 (`materials.contact_stiffness` of the top mass on a flat), `x_w` (m) the wall's
+      face in the top mass's coordinate. Both or neither (default: no wall). A chain with a wall is
+      held too (`until="t_max"`); `precompressed` places the wall for a static precompression.
 
     Laws of one type are stored as one vectorised law (`laws[g]` serves the interfaces `groups[g]`), so the
     vector field costs one call per law type, whatever `n`.
@@ -110,7 +116,10 @@ class Stack(eqx.Module):
     laws: tuple[AbstractContactLaw, ...]
     gravity: Array
     end_force: Array
+    wall_stiffness: Array
+    wall_position: Array
     ground: bool = eqx.field(static=True)
+    wall: bool = eqx.field(static=True)
     groups: tuple[tuple[int, ...], ...] = eqx.field(static=True)
 
     def __init__(
@@ -121,6 +130,8 @@ class Stack(eqx.Module):
         gravity: ArrayLike = STANDARD_GRAVITY,
         ground: bool = True,
         end_force: ArrayLike = 0.0,
+        wall_stiffness: ArrayLike | None = None,
+        wall_position: ArrayLike | None = None,
     ):
         masses = jnp.asarray(masses, dtype=float)
         gravity = jnp.asarray(gravity, dtype=float)
@@ -147,6 +158,18 @@ class Stack(eqx.Module):
             if float(f0) > 0 and not ground:
                 raise ParameterError("end_force", float(f0), "0 without the ground (nothing holds the chain "
                                      "against it)")
+        if (wall_stiffness is None) != (wall_position is None):
+            raise ParameterError("wall_position" if wall_position is None else "wall_stiffness", None,
+                                 "given together with the other (a far wall needs its stiffness and position)")
+        wall = wall_stiffness is not None
+        wall_stiffness = jnp.asarray(0.0 if wall_stiffness is None else wall_stiffness, dtype=float)
+        wall_position = jnp.asarray(0.0 if wall_position is None else wall_position, dtype=float)
+        if wall and _is_concrete(wall_stiffness, wall_position):
+            kw, xw = np.asarray(wall_stiffness), np.asarray(wall_position)
+            if kw.ndim or not (np.isfinite(kw) and kw > 0):
+                raise ParameterError("wall_stiffness", kw.tolist(), "a finite number > 0 (N/m^1.5)")
+            if xw.ndim or not np.isfinite(xw):
+                raise ParameterError("wall_position", xw.tolist(), "a finite number (m)")
         interfaces = list(range(0 if ground else 1, n))
         if isinstance(laws, AbstractContactLaw):
             shapes = {jnp.shape(leaf) for leaf in jax.tree.leaves(laws)}
@@ -171,7 +194,10 @@ class Stack(eqx.Module):
         self.laws = stacked
         self.gravity = gravity
         self.end_force = end_force
+        self.wall_stiffness = wall_stiffness
+        self.wall_position = wall_position
         self.ground = bool(ground)
+        self.wall = wall
         self.groups = groups
 
     # ---------------------------------------------------------------- structure
@@ -312,11 +338,41 @@ class Stack(eqx.Module):
         """`(..., n)` booleans: the contact is closed (force > 0 if clamped, `delta > 0` if not)."""
         return jnp.where(self.clamped(), self.forces(delta, delta_dot, q) > 0, delta > 0)
 
-    def accelerations(self, forces: Array) -> Array:
-        """`(..., n)` accelerations of the masses (m/s², upward) from the interface forces, gravity and the
-        end force on the top mass."""
-        above = jnp.concatenate([forces[..., 1:], jnp.broadcast_to(self.end_force[..., None], forces[..., :1].shape)],
-                                axis=-1)
+    @property
+    def held(self) -> bool:
+        """The chain is held at its far end (an end force or a wall; concrete stacks only): it never flies
+        apart, so it is simulated to `t_max`."""
+        return self.wall or bool(np.any(np.asarray(self.end_force) != 0))
+
+    def wall_overlap(self, x: Array) -> Array:
+        """`(...)` overlap of the top mass with the far wall, `x_n - x_w` (m; <= 0 when apart)."""
+        return x[..., -1] - self.wall_position
+
+    def wall_force(self, x: Array) -> Array:
+        """`(...)` force of the far wall on the top mass (N, >= 0 pushes it down; 0 without a wall)."""
+        if not self.wall:
+            return jnp.zeros_like(x[..., -1])
+        d = self.wall_overlap(x)
+        d = jnp.where(d > 0, d, 0.0)  # zero force and zero gradient while apart
+        return self.wall_stiffness * d**1.5
+
+    def wall_potential(self, x: Array) -> Array:
+        """`(...)` elastic energy of the far wall's contact, `(2/5) k_w <x_n - x_w>^{5/2}` (J)."""
+        if not self.wall:
+            return jnp.zeros_like(x[..., -1])
+        d = self.wall_overlap(x)
+        d = jnp.where(d > 0, d, 0.0)
+        return 0.4 * self.wall_stiffness * d**2.5
+
+    def accelerations(self, forces: Array, x: Array | None = None) -> Array:
+        """`(..., n)` accelerations of the masses (m/s², upward) from the interface forces, gravity, the
+        end force and (from the positions `x`, needed with a wall) the far wall's force on the top mass."""
+        top = jnp.broadcast_to(self.end_force[..., None], forces[..., :1].shape)
+        if self.wall:
+            if x is None:
+                raise ParameterError("x", None, "the positions, for the far wall's force")
+            top = top + self.wall_force(x)[..., None]
+        above = jnp.concatenate([forces[..., 1:], top], axis=-1)
         return (forces - above) / self.masses - self.gravity
 
     # ---------------------------------------------------------------- dynamics
@@ -339,8 +395,8 @@ class Stack(eqx.Module):
         d, dd = self.overlaps(x), self.overlap_rates(v)
         f = self.forces(d, dd, q)
         if q is None:  # the common path: the damping part's power, from the forces at hand
-            return jnp.concatenate([v, self.accelerations(f), (f - self.elastic_forces(d)) * dd], axis=-1)
-        parts = [v, self.accelerations(f), self.dissipated_powers(d, dd, q), self.memory_rates(d, dd, q)]
+            return jnp.concatenate([v, self.accelerations(f, x), (f - self.elastic_forces(d)) * dd], axis=-1)
+        parts = [v, self.accelerations(f, x), self.dissipated_powers(d, dd, q), self.memory_rates(d, dd, q)]
         return jnp.concatenate(parts, axis=-1)
 
     def energies(self, y: Array) -> dict[str, Array]:
@@ -350,7 +406,7 @@ class Stack(eqx.Module):
         return dict(
             kinetic=0.5 * jnp.sum(self.masses * v**2, axis=-1),
             gravitational=self.gravity * jnp.sum(self.masses * x, axis=-1) + self.end_force * x[..., -1],
-            elastic=jnp.sum(self.potentials(self.overlaps(x), self.memory(y)), axis=-1),
+            elastic=jnp.sum(self.potentials(self.overlaps(x), self.memory(y)), axis=-1) + self.wall_potential(x),
             dissipated=jnp.sum(diss, axis=-1),
         )
 
@@ -363,7 +419,7 @@ class Stack(eqx.Module):
         """
         x, v, diss = self.split(y)
         mech = self.masses * (0.5 * v**2 + self.gravity[..., None] * x)
-        mech = mech.at[..., -1].add(self.end_force * x[..., -1])
+        mech = mech.at[..., -1].add(self.end_force * x[..., -1] + self.wall_potential(x))
         return jnp.sum(jnp.concatenate([mech, self.potentials(self.overlaps(x), self.memory(y)), diss], axis=-1),
                        axis=-1)
 
@@ -496,3 +552,34 @@ def resting(stack: Stack, height: ArrayLike = 0.0) -> State:
     x = x1 - jnp.concatenate([jnp.zeros(1), jnp.cumsum(delta[1:])])
     v_ff = jnp.sqrt(2.0 * g * jnp.maximum(h, 0.0))
     return State(x, jnp.broadcast_to(-v_ff, x.shape))
+
+
+def precompressed(stack: Stack, force: ArrayLike, wall_stiffness: ArrayLike | None = None) -> tuple[Stack, State]:
+    """A chain on the ground precompressed by a static force `F0` at its far end, at rest: `(stack, state)`.
+
+    Without `wall_stiffness` the force is a dead load (`Stack.end_force = F0`). With it, the chain sits
+    between the ground and a rigid far wall (`Stack.wall_stiffness`, N/m^1.5) placed where the wall's
+    contact carries `F0` exactly: `x_w = x_n - (F0/k_w)^{2/3}` (the wall overlaps the top mass by the
+    static Hertz overlap), and no end force acts. Either way every
+    contact `j` carries `F0 + g sum_{i > j} m_i` (`resting`): the precompressed chain of Nesterenko
+    (2001, "Dynamics of heterogeneous materials", Springer). Concrete (not traced) arguments; the
+    returned state is at rest (give it velocities, e.g. a struck far bead, with `State`).
+
+    **Raises:** `ParameterError` for a stack without the ground, or `F0` / `k_w` not finite and > 0.
+    """
+    f0 = float(np.asarray(force))
+    if not (np.isfinite(f0) and f0 > 0):
+        raise ParameterError("force", f0, "a finite number > 0 (N): the static precompression")
+    if not stack.ground:
+        raise ParameterError("stack.ground", False, "True (the ground is the wall at mass 1 that holds the chain)")
+    laws = [stack.law_of(j) for j in stack.interfaces]
+    loaded = Stack(stack.masses, laws, gravity=stack.gravity, ground=True, end_force=f0)
+    rest = resting(loaded)
+    if wall_stiffness is None:
+        return loaded, rest
+    kw = float(np.asarray(wall_stiffness))
+    if not (np.isfinite(kw) and kw > 0):
+        raise ParameterError("wall_stiffness", kw, "a finite number > 0 (N/m^1.5)")
+    x_w = float(rest.positions[-1]) - (f0 / kw) ** (2.0 / 3.0)
+    walled = Stack(stack.masses, laws, gravity=stack.gravity, ground=True, wall_stiffness=kw, wall_position=x_w)
+    return walled, rest

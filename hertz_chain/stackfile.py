@@ -95,8 +95,9 @@ DAMPING_LIMITS = {name: (row.damping_max, f" {_UNITS[row.damping_dimension]}" if
 DESIGN_KINDS = ("mvg", "met")
 SHAPES = ("sphere", "flat")
 
-_TOP_KEYS = ("title", "drop", "stack", "ground", "contact", "materials", "solver", "optimize", "sweep", "test",
-             "srs", "fit")
+_TOP_KEYS = ("title", "drop", "stack", "ground", "wall", "contact", "materials", "solver", "optimize", "sweep",
+             "test", "srs", "fit")
+_WALL_KEYS = ("material", "stiffness", "gap")
 _SRS_KEYS = ("q", "damping", "per_octave", "band", "peak", "type")
 #: Where an SRS band may lie (Hz), and its largest f_max/f_min: the filters run at 50 samples per cycle of
 #: f_max and pad the record by a cycle of f_min, so the work grows as f_max/f_min (5 decades: 5e6
@@ -311,6 +312,18 @@ class SRSSpec:
 
 
 @dataclass(frozen=True)
+class WallSpec:
+    """`[wall]`: a rigid flat wall beyond the top mass (the far end of a chain between two walls), whose
+    contact with the top mass is elastic Hertz: `stiffness` in N/m^1.5, or `None` to compute it from
+    `material` (the wall's) and the top mass's material and radius; `gap` in m between the top mass and
+    the wall at the start (`None`: touching, or with `stack.end_force` the precompressed equilibrium)."""
+
+    material: str | None = None
+    stiffness: float | None = None
+    gap: float | None = None
+
+
+@dataclass(frozen=True)
 class StackSpec:
     """A whole stack file, validated, in SI units. `ground` is `None` for a chain without ground."""
 
@@ -323,6 +336,7 @@ class StackSpec:
     title: str | None = None
     source: str | None = None
     srs: SRSSpec = SRSSpec()
+    wall: WallSpec | None = None
 
     @property
     def n(self) -> int | None:
@@ -866,6 +880,33 @@ def _parse_ground(raw: Any) -> GroundSpec:
     return GroundSpec(material, shape, radius)
 
 
+def _parse_wall(raw: Any, bodies: BodiesSpec, n: int | None) -> WallSpec:
+    t = _table(raw, "wall", _WALL_KEYS)
+    material = _name(t["material"], "wall.material") if "material" in t else None
+    stiffness = _positive(t["stiffness"], "wall.stiffness", "hertz_stiffness") if "stiffness" in t else None
+    if material is not None and stiffness is not None:
+        raise _error("wall.material", "conflicts with wall.stiffness; give one (the stiffness, or the wall's "
+                     "material to compute it)")
+    if stiffness is None:
+        if material is None:
+            raise _error("wall.stiffness", "missing; give the Hertz stiffness of the top mass on the wall, or "
+                         "wall.material with stack.material and stack.radius")
+        top_mat, top_r = (v if v is None or not isinstance(v, tuple) else v[-1] for v in (bodies.material, bodies.radius))
+        if top_mat is None or top_r is None:
+            raise _error("wall.material", "needs stack.material and stack.radius (the top mass's) to compute "
+                         "the wall's stiffness; or give wall.stiffness")
+        if math.isinf(top_r):
+            raise _error("wall.material", "the top mass is flat (stack.radius = inf) and so is the wall: flat on "
+                         "flat is not Hertzian; give the top mass a finite radius or wall.stiffness")
+    gap = None
+    if "gap" in t:
+        if bodies.end_force > 0:
+            raise _error("wall.gap", "not used with stack.end_force: the wall is placed where it carries the "
+                         "end force (the precompressed equilibrium)")
+        gap = _non_negative(t["gap"], "wall.gap", "length")
+    return WallSpec(material, stiffness, gap)
+
+
 def _parse_solver(raw: Any) -> SolverSpec:
     t = _table(raw, "solver", _SOLVER_KEYS)
     solver = _choice(t["solver"], "solver.solver", SOLVERS) if "solver" in t else "tsit5"
@@ -1073,8 +1114,10 @@ def _build(data: Mapping) -> StackSpec:
                              "with a yield strength (p_y = 1.6 Y of the softer body)")
 
     solver = _parse_solver(top["solver"]) if "solver" in top else SolverSpec()
-    if bodies.end_force > 0 and solver.until != "t_max":
-        raise _error("solver.until", f"'{solver.until}' with stack.end_force: a chain held by an end force "
+    wall = _parse_wall(top["wall"], bodies, n) if "wall" in top else None
+    if (bodies.end_force > 0 or wall is not None) and solver.until != "t_max":
+        what = "stack.end_force" if bodies.end_force > 0 else "[wall]"
+        raise _error("solver.until", f"'{solver.until}' with {what}: a chain held by an end force or a wall "
                      "never flies apart; set solver.until = \"t_max\" and solver.t_max")
     if solver.max_steps is not None and n is not None:
         need = run_memory(n, solver.max_steps)
@@ -1083,7 +1126,7 @@ def _build(data: Mapping) -> StackSpec:
                f"{MAX_RUN_MEMORY / 2**30:g} GiB (lower max_steps)")
     drop_spec = DropSpec(gravity, impact_velocity, height)
     srs = _parse_srs(top["srs"]) if "srs" in top else SRSSpec()
-    return StackSpec(drop_spec, bodies, contacts, ground, solver, materials, title, srs=srs)
+    return StackSpec(drop_spec, bodies, contacts, ground, solver, materials, title, srs=srs, wall=wall)
 
 
 def _check_curved(contacts: ContactsSpec, bodies: BodiesSpec, ground, overrides, n) -> None:

@@ -1,5 +1,5 @@
-"""Chain end conditions (issue 21): an end force `F0` on the top mass and the precompressed chain in
-static equilibrium that it makes.
+"""Chain end conditions (issue 21): an end force `F0` on the top mass, a rigid wall beyond it, and the
+precompressed chain in static equilibrium that they make.
 
 References:
 
@@ -10,7 +10,11 @@ References:
   correction is second order in the amplitude over `delta_0`, 1e-3 here);
 - an independent scipy integration (`solve_ivp`, DOP853, rtol 1e-12), written here, of a precompressed
   Hertz chain under gravity whose top bead is struck: Newton's equations with the wall, the contacts,
-  gravity and the end force, from the closed-form equilibrium above.
+  gravity and the end force, from the closed-form equilibrium above; the same with a far wall (an elastic
+  Hertz contact `k_w <x_n - x_w>^{3/2}`) carrying `F0` instead of a dead load;
+- one bead bouncing between the ground and a far wall without gravity: its period is the two flights
+  `2 gap / v` plus the two Hertz contact times `3.21807 (m/k)^{2/5} v^{-1/5}` (Hertz 1882; docs/references.md,
+  "Hertz single impact"), and a flat wall's stiffness is `(4/3) E* sqrt(R)` (Johnson 1985, Eq. 4.23).
 """
 
 import numpy as np
@@ -73,21 +77,24 @@ def test_one_bead_pressed_on_a_wall_oscillates_at_the_linearised_hertz_frequency
     assert abs(sol.energy_error) < 1e-9
 
 
-def _scipy_chain(m, k, f0, g, v_top, t_eval):
+def _scipy_chain(m, k, f0, g, v_top, t_eval, k_wall=None):
     """Independent reference: the precompressed Hertz chain on a wall, written out (positions upward,
-    x_1 = -delta_0 on the wall), from the closed-form equilibrium, top bead struck at `v_top`."""
+    x_1 = -delta_0 on the wall), from the closed-form equilibrium, top bead struck at `v_top`. With `k_wall`
+    a far wall at `x_n - (F0/k_wall)^{2/3}` carries F0 instead of a dead load."""
     n = len(m)
     load = f0 + g * np.cumsum(m[::-1])[::-1]
     delta = (load / k) ** (2 / 3)
     x0 = -np.cumsum(delta)
     v_init = np.zeros(n)
     v_init[-1] = v_top
+    x_wall = None if k_wall is None else x0[-1] - (f0 / k_wall) ** (2 / 3)
 
     def rhs(_, y):
         x, v = y[:n], y[n:]
         d = np.concatenate([[-x[0]], x[:-1] - x[1:]])
         f = k * np.maximum(d, 0.0) ** 1.5
-        above = np.concatenate([f[1:], [f0]])
+        top = f0 if k_wall is None else k_wall * max(x[-1] - x_wall, 0.0) ** 1.5
+        above = np.concatenate([f[1:], [top]])
         return np.concatenate([v, (f - above) / m - g])
 
     out = solve_ivp(rhs, (0.0, t_eval[-1]), np.concatenate([x0, v_init]), method="DOP853", rtol=1e-12,
@@ -141,3 +148,68 @@ def test_cli_simulates_a_precompressed_chain(tmp_path):
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
     assert out["status"] == "complete"
+
+
+def test_chain_between_two_walls_from_a_stack_file_matches_scipy(tmp_path):
+    n, m, k, k_w, f0, v_top = 8, 4.5e-3, 1.2e10, 1.7e10, 2.0, -0.05
+    doc = _chain_doc(n)
+    doc["wall"] = {"stiffness": f"{k_w} N/m^1.5"}
+    built = hc.build(hc.load_stack_file(_file(tmp_path, doc)))
+    assert built.stack.wall and float(built.stack.end_force) == 0.0  # the wall carries F0, no dead load
+    ts = np.linspace(0.0, 4e-4, 41)
+    sol = hc.simulate(built.stack, built.state, ts=ts, **built.simulate_options)
+    assert sol.status is hc.Status.COMPLETE
+    ref = _scipy_chain(np.full(n, m), k, f0, G, v_top, ts, k_wall=k_w)
+    np.testing.assert_allclose(np.asarray(sol.grid.velocities), ref, rtol=0, atol=1e-8 * abs(v_top))
+    assert abs(sol.energy_error) < 1e-8  # the wall's elastic energy is in the audit
+    # at rest the wall's force is F0 (Newton on the top bead, the end force gone)
+    rest = hc.State(built.state.positions, np.zeros(n))
+    assert float(built.stack.wall_force(rest.positions)) == pytest.approx(f0, rel=1e-12)
+
+
+def test_one_bead_bounces_between_the_ground_and_a_wall_with_hertz_contact_times(tmp_path):
+    m, r, v, gap = 4e-3, 5e-3, 0.7, 1e-3
+    doc = {"drop": {"gravity": 0},
+           "materials": {"steel": {"youngs_modulus": "200 GPa", "poisson_ratio": 0.3}},
+           "stack": {"masses": [f"{m} kg"], "velocities": [f"{v} m/s"], "material": "steel", "radius": f"{r} m"},
+           "ground": {"material": "steel"}, "contact": {"law": "hertz"},
+           "wall": {"material": "steel", "gap": f"{gap} m"},
+           "solver": {"until": "t_max", "t_max": "10 ms", "rtol": 1e-12, "atol": 1e-12}}
+    built = hc.build(hc.load_stack_file(_file(tmp_path, doc)))
+    k = 4 / 3 * 200e9 / (2 * (1 - 0.3**2)) * np.sqrt(r)  # sphere on a flat of the same steel
+    assert float(built.stack.wall_stiffness) == pytest.approx(k, rel=1e-14)
+    assert float(built.stack.wall_position) == pytest.approx(gap, rel=1e-14)
+    t_c = 3.21807 * (m / k) ** 0.4 * v**-0.2
+    period = 2 * gap / v + 2 * t_c
+    sol = hc.simulate(built.stack, built.state, ts=np.array([period, 2 * period]), t_max=2 * period,
+                      until="t_max", tolerances=hc.Tolerances(rtol=1e-12, atol=1e-12))
+    x, vel = np.asarray(sol.grid.positions)[:, 0], np.asarray(sol.grid.velocities)[:, 0]
+    # back where it started, moving up at v; t_c's six published digits allow ~1e-6 t_c v of position
+    np.testing.assert_allclose(x, 0.0, atol=1e-5 * t_c * v)
+    np.testing.assert_allclose(vel, v, rtol=1e-9)
+
+
+def test_wall_bad_input_is_one_line(tmp_path):
+    base = _chain_doc()
+    cases = [
+        ({}, r"wall\.stiffness.*missing"),
+        ({"material": "steel-52100"}, r"wall\.material.*stack\.material"),
+        ({"stiffness": "1e10 N/m^1.5", "gap": "1 mm"}, r"wall\.gap.*end_force"),
+        ({"stiffness": "1e10 N/m^1.5", "material": "steel-52100"}, r"wall\.material.*conflicts"),
+        ({"stiffness": "-1 N/m^1.5"}, r"wall\.stiffness"),
+        ({"stiffness": "1e10 N/m^1.5", "colour": "red"}, r"wall\.colour"),
+    ]
+    for i, (wall, pattern) in enumerate(cases):
+        doc = dict(base, wall=wall)
+        with pytest.raises(StackFileError, match=pattern):
+            hc.load_stack_file(_file(tmp_path, doc, f"w{i}.toml"))
+    doc = dict(base, wall={"stiffness": "1e10 N/m^1.5"})
+    doc["stack"] = dict(doc["stack"], end_force=0)
+    doc["solver"] = {}
+    with pytest.raises(StackFileError, match=r"solver\.until.*\[wall\]"):
+        hc.load_stack_file(_file(tmp_path, doc, "u.toml"))
+    with pytest.raises(ParameterError, match="wall_position"):
+        hc.Stack([1.0], hc.Hertz(1e9), wall_stiffness=1e9)
+    stack = hc.Stack([1.0], hc.Hertz(1e9), wall_stiffness=1e9, wall_position=0.1)
+    with pytest.raises(ParameterError, match="until.*t_max"):
+        hc.launch_velocity(stack, hc.at_impact(stack, 1.0))
