@@ -101,6 +101,10 @@ class DesignMap:
         self.ground = spec.has_ground
         self.interfaces = tuple(range(0 if self.ground else 1, n))
         self.contacts = {j: spec.contact_for(j) for j in self.interfaces}
+        if spec.stack.end_force > 0 or spec.wall is not None:
+            what = "stack.end_force" if spec.stack.end_force > 0 else "[wall]"
+            raise StackFileError(f"{section}: this stack is held by {what} (a chain that never flies apart, run to "
+                                 "t_max); optimize, sweep and fit do not support held chains yet (simulate does)")
         for j, cs in self.contacts.items():
             if LAWS[cs.law].memory or LAWS[cs.law].params:
                 why = "keeps a plastic memory" if LAWS[cs.law].memory else "has further parameters"

@@ -213,3 +213,10 @@ def test_wall_bad_input_is_one_line(tmp_path):
     stack = hc.Stack([1.0], hc.Hertz(1e9), wall_stiffness=1e9, wall_position=0.1)
     with pytest.raises(ParameterError, match="until.*t_max"):
         hc.launch_velocity(stack, hc.at_impact(stack, 1.0))
+
+
+def test_design_maps_refuse_held_chains_in_one_line(tmp_path):
+    doc = _chain_doc()
+    doc["sweep"] = {"axis": [{"key": "stack.masses", "index": [2], "values": ["4 g", "5 g"]}]}
+    with pytest.raises(StackFileError, match=r"sweep.*held by stack\.end_force"):
+        hc.sweep(_file(tmp_path, doc), tmp_path / "out.zarr")
