@@ -97,6 +97,7 @@ class Report:
     peak_velocities: np.ndarray | None = None  # (n,) each mass's largest upward velocity in the first cascade
     peak_velocity_times: np.ndarray | None = None  # (n,) and when (Hermite-refined with the accelerations)
     wave_speed: float = float("nan")  # contacts per second along the chain, + toward the top (`wave_speed`)
+    wall_peak_force: float = float("nan")  # the far wall's largest force on the top mass at the steps (N; [wall])
 
     @property
     def top_pulse(self) -> PulseMetrics | None:
@@ -375,6 +376,8 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
         peak_velocities=peak_v,
         peak_velocity_times=peak_t,
         wave_speed=speed,
+        wall_peak_force=float(np.max(np.asarray(stack.wall_force(np.asarray(st.positions))))) if stack.wall
+        else float("nan"),
     )
 
 

@@ -102,6 +102,7 @@ def to_dict(report: Report) -> dict:
         "peak_velocities_mps": None if report.peak_velocities is None else _nums(report.peak_velocities),
         "peak_velocity_times_s": None if report.peak_velocity_times is None else _nums(report.peak_velocity_times),
         "wave_speed_per_s": _num(report.wave_speed),
+        "wall_peak_force_N": _num(report.wall_peak_force),
         "top_efficiency": _num(report.top_efficiency),
         "rigid": {
             "nominal_gain": _num(rigid.nominal_gain),
@@ -298,6 +299,9 @@ def to_dataset(report: Report, meta: dict | None = None):
         "dissipated": (("time", "interface"), st.dissipated,
                        {"units": "J", "long_name": "energy dissipated in the interface so far"}),
         "energy": (("time",), st.energy, {"units": "J", "long_name": "kinetic + gravitational + elastic + dissipated energy"}),
+        **({"wall_force": (("time",), np.asarray(report.solution.stack.wall_force(np.asarray(st.positions))),
+                           {"units": "N", "long_name": "force of the far wall on the top mass ([wall])"})}
+           if report.solution.stack.wall else {}),
         "mass_kg": (("mass",), report.masses, {"units": "kg", "long_name": "mass"}),
         "launch_velocity": (("mass",), report.launch_velocities,
                             {"units": "m s-1", "long_name": "velocity when the mass's last contact of the cascade ended"}),

@@ -77,7 +77,7 @@ def test_one_bead_pressed_on_a_wall_oscillates_at_the_linearised_hertz_frequency
     assert abs(sol.energy_error) < 1e-9
 
 
-def _scipy_chain(m, k, f0, g, v_top, t_eval, k_wall=None):
+def _scipy_chain(m, k, f0, g, v_top, t_eval, k_wall=None, positions=False):
     """Independent reference: the precompressed Hertz chain on a wall, written out (positions upward,
     x_1 = -delta_0 on the wall), from the closed-form equilibrium, top bead struck at `v_top`. With `k_wall`
     a far wall at `x_n - (F0/k_wall)^{2/3}` carries F0 instead of a dead load."""
@@ -99,7 +99,7 @@ def _scipy_chain(m, k, f0, g, v_top, t_eval, k_wall=None):
 
     out = solve_ivp(rhs, (0.0, t_eval[-1]), np.concatenate([x0, v_init]), method="DOP853", rtol=1e-12,
                     atol=1e-20, t_eval=t_eval)
-    return out.y[n:].T
+    return out.y[:n].T if positions else out.y[n:].T
 
 
 def test_precompressed_chain_from_a_stack_file_matches_an_independent_scipy_solve(tmp_path):
@@ -165,6 +165,14 @@ def test_chain_between_two_walls_from_a_stack_file_matches_scipy(tmp_path):
     # at rest the wall's force is F0 (Newton on the top bead, the end force gone)
     rest = hc.State(built.state.positions, np.zeros(n))
     assert float(built.stack.wall_force(rest.positions)) == pytest.approx(f0, rel=1e-12)
+    # the report's largest wall force is the scipy trajectory's (at the steps: within the sampling)
+    report = hc.analyse(hc.simulate(built.stack, built.state, **built.simulate_options))
+    t_fine = np.linspace(0.0, 4e-4, 4001)
+    x_ref = _scipy_chain(np.full(n, m), k, f0, G, v_top, t_fine, k_wall=k_w, positions=True)
+    x_wall = float(built.stack.wall_position)
+    f_ref = k_w * np.maximum(x_ref[:, -1] - x_wall, 0.0) ** 1.5
+    assert report.wall_peak_force == pytest.approx(f_ref.max(), rel=1e-3)
+    assert report.wall_peak_force > 2 * f0  # the wave reached the wall
 
 
 def test_one_bead_bounces_between_the_ground_and_a_wall_with_hertz_contact_times(tmp_path):
