@@ -51,6 +51,7 @@ _EXPORTS = {
     "HertzDashpot": "contact",
     "PowerLaw": "contact",
     "Thornton": "contact",
+    "JacksonGreen": "contact",
     "make_law": "contact",
     "ContactEpisode": "episodes",
     "contact_episodes": "episodes",

@@ -104,7 +104,7 @@ def _yield_limits(spec: StackSpec, n: int, interfaces) -> dict[int, YieldLimit]:
         soft = min(yielding, key=lambda mat: mat.yield_pressure)
         R1, R2 = (r[1], r[0]) if math.isinf(r[0]) else r
         out[j] = YieldLimit(j, effective_modulus(*pair), effective_radius(R1, None if math.isinf(R2) else R2),
-                            soft.yield_pressure, soft.name)
+                            soft.yield_pressure, soft.name, soft.yield_strength, soft.poisson_ratio)
     return out
 
 
@@ -187,12 +187,16 @@ def _effective_radius(spec: StackSpec, cs: ContactSpec, j: int, n: int) -> float
 def _law(cs: ContactSpec, stiffness: float, m_eff: float, v_c: float | None,
          radius: float | None = None, limit: YieldLimit | None = None) -> AbstractContactLaw:
     params = dict(cs.params)
-    for key in LAWS[cs.law].from_materials:  # e.g. thornton's yield_pressure from the softer body's Y
+    row = LAWS[cs.law]
+    for key in row.from_materials:  # e.g. thornton's yield_pressure from the softer body's Y
         if key not in params:
             if limit is None:
                 raise ParameterError(key, None, "a value in the file, or stack.material with a yield strength "
                                      "(yield_strength_Pa in the material table or [materials.NAME])")
-            params[key] = limit.yield_pressure
+            params[key] = getattr(limit, key)
+    for key in row.context:  # e.g. jackson-green's Poisson ratio, the yielding body's when known
+        if limit is not None:
+            params[key] = getattr(limit, key)
     return make_law(cs.law, stiffness=stiffness, restitution=cs.restitution, effective_mass=m_eff,
                     calibration_velocity=v_c, chi_map=cs.chi_map, alpha=cs.alpha, damping=cs.damping,
                     clamp=cs.clamp, effective_radius=radius, **params)

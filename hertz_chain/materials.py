@@ -229,13 +229,16 @@ def hertz_peak_pressure(force, E_star: float, R_star: float):
 class YieldLimit:
     """Where an interface first yields: its effective modulus `E*` (Pa) and radius `R*` (m) from the
     materials and radii, and the yield pressure `p_y = 1.6 Y` (Pa) of the softer body with a yield
-    strength (`material` names it; `materials.YIELD_PRESSURE_FACTOR`)."""
+    strength (`material` names it; `materials.YIELD_PRESSURE_FACTOR`), with that body's yield strength `Y`
+    (Pa) and Poisson ratio."""
 
     interface: int
     modulus: float
     radius: float
     yield_pressure: float
     material: str
+    yield_strength: float = float("nan")
+    poisson_ratio: float = 0.3
 
     def peak_pressure(self, force):
         """`hertz_peak_pressure` of this interface at `force` (N)."""

@@ -47,7 +47,9 @@ class LawRow:
       (a `stackfile` dimension name), passed to its `from_config` by name; `needs_radius`: it needs the
       interface's effective radius (from `stack.radius`), passed as `effective_radius`.
       `from_materials`: the keys of `params` that may instead follow from the materials (`yield_pressure`:
-      `p_y = 1.6 Y` of the softer of the two bodies, `materials.YIELD_PRESSURE_FACTOR`).
+      `p_y = 1.6 Y` of the softer of the two bodies, `materials.YIELD_PRESSURE_FACTOR`; `yield_strength`:
+      that body's Y). `context`: optional values the law takes from the materials when they are known
+      (`poisson_ratio`: the yielding body's), never from the file.
     """
 
     name: str
@@ -66,6 +68,7 @@ class LawRow:
     params: tuple[tuple[str, str], ...] = ()
     needs_radius: bool = False
     from_materials: tuple[str, ...] = ()
+    context: tuple[str, ...] = ()
 
     @property
     def hertzian(self) -> bool:
@@ -122,6 +125,8 @@ LAWS: dict[str, LawRow] = {row.name: row for row in (
            params=(("exponent", "dimensionless"),)),
     LawRow("thornton", "Thornton", memory=True, params=(("yield_pressure", "pressure"),), needs_radius=True,
            from_materials=("yield_pressure",)),
+    LawRow("jackson-green", "JacksonGreen", memory=True, params=(("yield_strength", "pressure"),), needs_radius=True,
+           from_materials=("yield_strength",), context=("poisson_ratio",)),
 )}
 """Contact laws by configuration name (see `LawRow`)."""
 

@@ -1111,7 +1111,7 @@ def _build(data: Mapping) -> StackSpec:
         for pkey in row.from_materials:
             if pkey not in given and bodies.material is None:
                 raise _error(_join(label, pkey), f"missing; law {spec_.law!r} needs {pkey}, or stack.material "
-                             "with a yield strength (p_y = 1.6 Y of the softer body)")
+                             "with a yield strength (the softer body's Y gives it)")
 
     solver = _parse_solver(top["solver"]) if "solver" in top else SolverSpec()
     wall = _parse_wall(top["wall"], bodies, n) if "wall" in top else None

@@ -73,6 +73,18 @@ def thornton_e(r):
 R_Y = brentq(lambda r: thornton_e(r) - E, 1e-6, 1.0)
 DELTA_Y = (1.25 * M * (R_Y * VC) ** 2 / K) ** 0.4
 laws["thornton"] = hc.Thornton(K, DELTA_Y)
+# Jackson & Green (2005) on a 1 cm radius (E' = 3k/(4 sqrt R) = 7.5 GPa, nu = 0.3): the yield strength that
+# gives e = 0.8 at 1 m/s, from the law's own energy balance (loading work by quadrature, Hertz unloading)
+R_JG = 0.01
+
+
+def _jg(s_y):
+    return hc.make_law("jackson-green", stiffness=K, yield_strength=s_y, effective_radius=R_JG)
+
+
+S_Y = brentq(lambda s: float(_jg(s).restitution_at(VC, M)) - E, 1e6, 1e9, rtol=1e-10)
+laws["jackson-green"] = _jg(S_Y)
+print(f"jackson-green: S_y = {S_Y / 1e6:.2f} MPa gives e = {E} at {VC} m/s")
 laws = {name: laws[name] for name in hc.LAW_NAMES if name in laws}  # the registry's order
 assert tuple(laws) == hc.LAW_NAMES  # every law of the package
 print(f"Hertz contact time at 1 m/s: {TC_HERTZ * 1e3:.4f} ms; k_lin = {K_LIN:.4e} N/m")
@@ -103,6 +115,8 @@ e_ref = {
                                                                      * M**-0.6 * K**-0.4 * v**-0.2) for v in vs]),
     "thornton": thornton_e(R_Y * VC / vs),
     "power": calibration.hunt_crossley_restitution(float(laws["power"].alpha), vs),  # exact map, any exponent
+    # energy balance of the published loading fit and the Hertz unloading (quadrature, not the ODE)
+    "jackson-green": np.asarray(laws["jackson-green"].restitution_at(vs, M)),
 }
 for name in laws:
     dev = np.max(np.abs(e_sim[name] - e_ref[name]))
@@ -131,7 +145,8 @@ curves = {"hertz": np.ones_like(vfine), "hunt-crossley": calibration.hunt_crossl
           "viscoelastic": calibration.viscoelastic_restitution_pade(xf),
           "hertz-dashpot": np.interp(np.log(vfine), np.log(vs), e_ref["hertz-dashpot"]),
           "thornton": thornton_e(R_Y * VC / vfine),
-          "power": calibration.hunt_crossley_restitution(float(laws["power"].alpha), vfine)}
+          "power": calibration.hunt_crossley_restitution(float(laws["power"].alpha), vfine),
+          "jackson-green": np.asarray(laws["jackson-green"].restitution_at(vfine, M))}
 for i, name in enumerate(laws):
     ax.semilogx(vfine, curves[name], color=f"C{i}", lw=1, ls="--" if name == "kelvin-voigt" else "-")
     ax.semilogx(vs, e_sim[name], "o", color=f"C{i}", ms=5, label=f"{name} (simulated)")

@@ -102,8 +102,10 @@ def test_clamp_switch():
 
 
 def test_names():
+    from hertz_chain import contact as hc_contact
+
     assert [c.name for c in (Hertz, HuntCrossley, Tsuji, KelvinVoigt, Viscoelastic, HertzDashpot, PowerLaw,
-                             Thornton)] == list(LAW_NAMES)
+                             Thornton, hc_contact.JacksonGreen)] == list(LAW_NAMES)
 
 
 @pytest.mark.parametrize("p", [1.2, 2.0])
