@@ -105,11 +105,21 @@ class DesignMap:
             what = "stack.end_force" if spec.stack.end_force > 0 else "[wall]"
             raise StackFileError(f"{section}: this stack is held by {what} (a chain that never flies apart, run to "
                                  "t_max); optimize, sweep and fit do not support held chains yet (simulate does)")
+        stiffness_varied = {j for s in slots if s.key == "contact.stiffness"
+                            for j in (self.interfaces if s.index is None else (s.index,))}
         for j, cs in self.contacts.items():
-            if LAWS[cs.law].memory or LAWS[cs.law].params:
-                why = "keeps a plastic memory" if LAWS[cs.law].memory else "has further parameters"
-                raise StackFileError(f"{section}: contact law {cs.law!r} (interface {j}) {why}; optimize, "
-                                     "sweep and fit do not support it yet (simulate does)")
+            row = LAWS[cs.law]
+            why = None
+            if row.memory and section.startswith("optimize"):
+                why = ("keeps a plastic memory, and optimize's gradients do not go through it yet; sweep and "
+                       "fit (no gradients) support it")
+            elif cs.law == "jackson-green" and j in stiffness_varied:
+                why = "joins its fit where it meets Hertz, a point that moves with the stiffness; its stiffness " \
+                      "cannot vary (run one file per stiffness)"
+            elif row.params and not row.memory and cs.restitution is not None:
+                why = "is calibrated to a restitution through its further parameters; give its damping instead"
+            if why is not None:
+                raise StackFileError(f"{section}: contact law {cs.law!r} (interface {j}) {why}")
         k = np.full(n, math.nan)
         for j, cs in self.contacts.items():
             k[j] = _stiffness(spec, cs, j, n)
@@ -141,7 +151,8 @@ class DesignMap:
         if s.key == "contact.restitution":
             cs = self.contacts[s.index]
             if LAWS[cs.law].elastic or cs.restitution is None:
-                why = "is elastic" if LAWS[cs.law].elastic else "is given by its raw damping"
+                why = ("is elastic" if LAWS[cs.law].elastic else "is plastic (e follows from its yield parameters "
+                       "and the impact speed)" if LAWS[cs.law].memory else "is given by its raw damping")
                 raise StackFileError(f"{where}: interface {s.index}'s law {cs.law!r} {why}; it has no "
                                      "restitution to vary")
 
@@ -174,7 +185,12 @@ class DesignMap:
         for j, cs in self.contacts.items():
             base_law = self.built.laws[j]
             cls = type(base_law)
-            if LAWS[cs.law].elastic or cs.restitution is None:
+            if cs.law == "thornton":  # delta_y = R (pi p_y / 2E*)^2 with E* ~ k: delta_y ~ 1/k^2 at fixed p_y, R
+                law = eqx.tree_at(lambda law: (law.k, law.delta_y), base_law,
+                                  (k[j], base_law.delta_y * (base_law.k / k[j]) ** 2))
+            elif LAWS[cs.law].memory:  # jackson-green: its stiffness is not varied (checked above)
+                law = base_law
+            elif LAWS[cs.law].elastic or cs.restitution is None:
                 law = eqx.tree_at(lambda law: law.k, base_law, k[j])
                 if hasattr(law, "m_eff"):
                     law = eqx.tree_at(lambda law: law.m_eff, law, m_eff[j])

@@ -400,3 +400,16 @@ def test_a_peak_force_limit_stops_the_drop_speed_where_johnson_says(tmp_path):
     assert result.status.ok and result.convergence["method"] == "COBYQA"
     speed = float(tomllib.loads(result.document())["drop"]["impact_velocity"])
     assert speed == pytest.approx(v_star, rel=1e-3)  # measured 1.5e-4 (COBYQA's constraint tolerance)
+
+
+def test_optimize_refuses_a_plastic_law_and_names_sweep_and_fit(tmp_path):
+    from hertz_chain.errors import StackFileError
+
+    doc = ('[drop]\nimpact_velocity = "1 m/s"\ngravity = 0\n[stack]\nmasses = [1.0, 0.3, 0.1]\ngaps = 0\nradius = "5 mm"\n'
+           '[contact]\nlaw = "thornton"\nstiffness = "1e10 N/m^1.5"\nyield_pressure = "1 GPa"\n'
+           '[optimize]\nobjective = "gain"\n[[optimize.vary]]\nkey = "stack.masses"\nindex = [2]\n'
+           'bounds = ["10 g", "1 kg"]\n')
+    p = tmp_path / "o.toml"
+    p.write_text(doc)
+    with pytest.raises(StackFileError, match=r"optimize\.vary: contact law 'thornton'.*sweep and fit"):
+        hc.optimize(p)
