@@ -36,7 +36,7 @@ from jaxtyping import Array, ArrayLike
 from . import _config  # noqa: F401  (float64)
 from . import calibration as _cal
 from . import registry as _registry
-from .errors import ParameterError
+from .errors import ParameterError, check_non_negative, check_positive
 
 __all__ = [
     "AbstractContactLaw",
@@ -873,24 +873,8 @@ def _scalar(a):
     return float(a) if a.ndim == 0 else a
 
 
-def _positive(value, name: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(name, value, "a finite number > 0") from None
-    if not (math.isfinite(v) and v > 0.0):
-        raise ParameterError(name, value, "a finite number > 0")
-    return v
-
-
-def _nonnegative(value, name: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(name, value, "a finite number >= 0") from None
-    if not (math.isfinite(v) and v >= 0.0):
-        raise ParameterError(name, value, "a finite number >= 0")
-    return v
+_positive = check_positive
+_nonnegative = check_non_negative
 
 
 def _stiffness(k) -> float:

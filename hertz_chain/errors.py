@@ -6,6 +6,8 @@ type and print a single line. Messages name the parameter, the offending value a
 
 from __future__ import annotations
 
+import math
+
 __all__ = [
     "HertzChainError",
     "ParameterError",
@@ -13,6 +15,9 @@ __all__ = [
     "SolverError",
     "OutputPathError",
     "check_parameter",
+    "check_number",
+    "check_positive",
+    "check_non_negative",
 ]
 
 
@@ -65,3 +70,32 @@ def check_parameter(ok: bool, name: str, value: object, allowed: str) -> None:
     """
     if not bool(ok):
         raise ParameterError(name, value, allowed)
+
+
+# ------------------------------------------------------------------ the one home of plain-number checks
+# (quantities with units are parsed and range-checked by `hertz_chain.units`; these take plain SI numbers)
+def check_number(value: object, name: str) -> float:
+    """``float(value)``, or :class:`ParameterError` naming ``name`` for a non-number or NaN."""
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ParameterError(name, value, "a number") from None
+    if math.isnan(v):
+        raise ParameterError(name, value, "a number (not NaN)")
+    return v
+
+
+def check_positive(value: object, name: str, allow_inf: bool = False) -> float:
+    """``float(value)`` if finite and > 0 (or ``inf`` with ``allow_inf``), else :class:`ParameterError`."""
+    v = check_number(value, name)
+    if not (v > 0.0 and (allow_inf or math.isfinite(v))):
+        raise ParameterError(name, value, "a finite number > 0" + (" (inf for a flat)" if allow_inf else ""))
+    return v
+
+
+def check_non_negative(value: object, name: str) -> float:
+    """``float(value)`` if finite and >= 0, else :class:`ParameterError`."""
+    v = check_number(value, name)
+    if not (math.isfinite(v) and v >= 0.0):
+        raise ParameterError(name, value, "a finite number >= 0")
+    return v

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import ParameterError
+from .errors import ParameterError, check_number, check_positive
 
 __all__ = [
     "YIELD_PRESSURE_FACTOR",
@@ -58,21 +58,8 @@ MATERIALS_CSV = Path(__file__).resolve().parent / "data" / "materials.csv"
 YIELD_PRESSURE_FACTOR = 1.6
 
 
-def _number(value, name: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(name, value, "a number") from None
-    if math.isnan(v):
-        raise ParameterError(name, value, "a number (not NaN)")
-    return v
-
-
-def _positive(value, name: str, allow_inf: bool = False) -> float:
-    v = _number(value, name)
-    if not (v > 0.0 and (allow_inf or math.isfinite(v))):
-        raise ParameterError(name, value, "> 0" + (" (inf for a flat)" if allow_inf else " and finite"))
-    return v
+_number = check_number
+_positive = check_positive
 
 
 def _poisson(value, name: str = "poisson_ratio") -> float:
