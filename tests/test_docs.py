@@ -139,3 +139,19 @@ def test_the_documentation_site_builds_strictly(tmp_path):
     api = (tmp_path / "site" / "api" / "index.html").read_text()
     for name in ("simulate_batch", "launch_velocity", "LawRow", "Status", "load_stack_file"):
         assert name in api, name
+
+
+def test_the_notebooks_page_is_written_from_every_notebook():
+    # docs/hooks/notebooks.py replaces the page's marker with each notebook's opening cell
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("nb_hook", ROOT / "docs" / "hooks" / "notebooks.py")
+    hook = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(hook)
+    page = (ROOT / "docs" / "notebooks.md").read_text(encoding="utf-8")
+    out = hook.on_page_markdown(page, None, None, None)
+    assert hook.MARKER in page and hook.MARKER not in out
+    for path in sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.py")):
+        title = hook.opening_cell(path).splitlines()[0]
+        assert title.startswith("## ") and title in out, path.name
+        assert f"notebooks/{path.name}" in out
