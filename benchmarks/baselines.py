@@ -32,7 +32,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 from scipy.integrate import solve_ivp
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -178,6 +178,77 @@ def tsit5(y0, t1, rtol, atol, max_step, first_step, m, k, c, ground, scale, T, A
             accepted += 1
             prev_inv = inv
     return y, steps, accepted
+
+
+@njit(parallel=True, cache=True)
+def tsit5_batch(Y0, T1, rtol, atol, max_step, first_step, M, K, C, S, T, A, B, E):
+    """`tsit5` over designs in parallel (numba `prange`, one thread per core): row `d` of every array is
+    design `d`. Returns the top mass's scaled final velocity and the step count of every design."""
+    nd, n = M.shape
+    top = np.empty(nd)
+    steps = np.empty(nd, np.int64)
+    for d in prange(nd):
+        y, s, _ = tsit5(Y0[d], T1[d], rtol, atol, max_step, first_step, M[d], K[d], C[d], True, S[d], T[d], A, B, E)
+        top[d] = y[2 * n - 1]
+        steps[d] = s
+    return top, steps
+
+
+def batched(quick: bool, designs: int = 1024, rtol: float = 1e-9) -> dict:
+    """Throughput on many designs of one structure: `hc.simulate_batch(save_steps=False)` (vmapped,
+    split over the CPU devices) against `tsit5_batch` (numba, `prange` over designs), five-mass gapped
+    Tsuji stacks whose interior masses are the MVG masses times a random factor in [0.8, 1.2], the same
+    `rtol = atol`, each numba design run to the library's own end time for it. Times are medians after
+    compilation; the agreement is the largest relative difference of the top launch velocities."""
+    import jax
+
+    designs = 128 if quick else designs
+    rng = np.random.default_rng(1)
+    regime = cases.REGIMES["gapped-tsuji"]
+    base = cases.masses(5)
+    stacks, states, args = [], [], []
+    for _ in range(designs):
+        m = base.copy()
+        m[1:-1] *= rng.uniform(0.8, 1.2, 3)
+        stack = hc.Stack(m, cases.laws(regime, m), gravity=0.0)
+        state = hc.at_impact(stack, cases.V_IMPACT, regime.gap)
+        stacks.append(stack)
+        states.append(state)
+        meff = cases.effective_masses(m)
+        kk = np.full(5, cases.K_STEEL)
+        eta = np.array([float(stack.law_of(j).eta) for j in range(5)])
+        sc = _scales(stack, state)
+        args.append((m, kk, eta * np.sqrt(meff * kk), np.asarray(sc.vector(5), dtype=float), float(sc.time),
+                     float(sc.velocity), np.asarray(state.flat(), dtype=float)))
+    batch_stack = hc.stack_designs(stacks)
+    batch_state = jax.tree.map(lambda *x: np.stack(x), *states)
+    tol = hc.Tolerances(rtol=rtol, atol=rtol)
+
+    def run_lib():
+        return jax.block_until_ready(hc.simulate_batch(batch_stack, batch_state, tolerances=tol, save_steps=False,
+                                                       max_steps=16384))
+
+    sol = run_lib()
+    lib_top = np.asarray(sol.launch_velocities)[:, -1]
+    t_end = np.asarray(sol.t_final)
+    M, K, C, S, T, V, Y = (np.stack([a[i] for a in args]) for i in range(7))
+    Y0 = np.concatenate([Y / S, np.zeros((designs, 5))], axis=1)  # with the onset proxies, as the library
+    S_p = np.concatenate([S, np.ones((designs, 5))], axis=1)[:, : 3 * 5]
+    T1 = t_end / T
+
+    def run_nb():
+        return tsit5_batch(Y0, T1, rtol, rtol, MAX_STEP, FIRST_STEP, M, K, C, S_p, T, _A, _B, _E)
+
+    top, nb_steps = run_nb()
+    nb_top = top * V
+    lib_t = median_time(run_lib, 3 if quick else 7, budget_s=60.0)
+    nb_t = median_time(run_nb, 3 if quick else 7, budget_s=60.0)
+    return dict(designs=designs, rtol=rtol, devices=len(jax.devices()), threads=int(os.environ.get("NUMBA_NUM_THREADS",
+                os.cpu_count() or 1)), library_ms_per_design=1e3 * lib_t / designs,
+                numba_ms_per_design=1e3 * nb_t / designs, ratio=lib_t / nb_t,
+                agreement=float(np.max(np.abs(nb_top - lib_top) / np.abs(lib_top))),
+                agreement_median=float(np.median(np.abs(nb_top - lib_top) / np.abs(lib_top))),
+                steps_library=float(np.mean(np.asarray(sol.num_steps))), steps_numba=float(np.mean(nb_steps)))
 
 
 # ============================================================================ one case
@@ -361,6 +432,19 @@ def _write(data: dict, path: str | None) -> None:
         lines += ["", f"Fixed cost: `launch_velocity` {fc['launch_velocity_fixed_us']:.0f} us, the prepared callable "
                   f"{fc['prepared_fixed_us']:.0f} us (target: under 50 us); per step {fc['launch_velocity_per_step_us']:.2f} "
                   f"and {fc['prepared_per_step_us']:.2f} us."]
+    bt = data.get("batched")
+    if bt:
+        lines += ["", "## Many designs at once", "",
+                  f"{bt['designs']} five-mass gapped Tsuji stacks (interior masses the MVG masses x U[0.8, 1.2]), "
+                  f"rtol = atol = {bt['rtol']:.0e}: `hc.simulate_batch(save_steps=False)` on {bt['devices']} CPU "
+                  f"device(s) against the numba Tsit5 loop with `prange` over designs on {bt['threads']} thread(s), "
+                  "each numba design run to the library's end time for it.", "",
+                  "| method | ms per design | mean steps |", "|---|---|---|",
+                  f"| hertz_chain `simulate_batch` | {bt['library_ms_per_design']:.3f} | {bt['steps_library']:.0f} |",
+                  f"| numba Tsit5, `prange` | {bt['numba_ms_per_design']:.3f} | {bt['steps_numba']:.0f} |", "",
+                  f"hertz_chain / numba: {bt['ratio']:.2f}; top launch velocities agree to {bt['agreement']:.1e} "
+                  f"(median {bt['agreement_median']:.1e}; the two step sequences part by rounding, each within its "
+                  "tolerance)."]
     lines += ["", "Checks: the numba field equals the library's scaled field at random states (largest relative "
               "difference per case below); the numba Tsit5 loop gives the library's launch velocity at rtol 1e-10.", ""]
     for case in data["cases"]:
@@ -390,6 +474,8 @@ def main(argv=None) -> int:
         data["cases"].append(run_case(n, regime, args.quick))
     print("fixed cost ...", flush=True)
     data["fixed_cost"] = fixed_cost(args.quick)
+    print("many designs ...", flush=True)
+    data["batched"] = batched(args.quick)
     data["load"][1] = os.getloadavg()[0]
     _write(data, args.output)
     if args.json:
