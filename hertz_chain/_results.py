@@ -111,7 +111,9 @@ class BatchSolution:
     contact's separation over approach speed (paper Eq 2), both read at the accepted points just around
     it, in free flight, where gravity leaves the relative speed of two falling bodies unchanged (against
     the fixed ground it changes by up to g h within a step h; a neighbour's contact acting within that
-    step also shifts it); NaN without a finished contact; all three None with a step history (analyse a design instead).
+    step also shifts it); NaN without a finished contact; `first_contacts (B, n, 2)`: the first accepted
+    points in and after each interface's first contact (s; within a step of its start and end; NaN
+    without one); all four None with a step history (analyse a design instead).
     """
 
     status_code: np.ndarray
@@ -133,6 +135,7 @@ class BatchSolution:
     peak_forces: np.ndarray | None = None
     impact_velocities: np.ndarray | None = None
     restitutions: np.ndarray | None = None
+    first_contacts: np.ndarray | None = None
 
     @property
     def ok(self) -> np.ndarray:

@@ -181,6 +181,8 @@ def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, launch_only
         approach, release = pk[2] - pk[1], pk[3] - pk[4]
         ok = jnp.isfinite(release) & (approach > 1e-12 * sc.velocity)
         out["restitutions"] = jnp.where(ok, release / jnp.where(ok, approach, 1.0), jnp.nan)
+        # the first contact of every interface, [first point in it, first point after it] (s; step-resolved)
+        out["first_contacts"] = jnp.stack([pk[5], pk[6]], axis=-1) * sc.time
     if ts is not None:
         grid = _derived(stack, sol.ys[int(cfg.save_steps)][:, :n3] * scale)
         grid["t"] = ts

@@ -139,7 +139,8 @@ class _Contacts(eqx.Module):
     each interface's largest contact force at the accepted points of the first cascade (N; the step-sampled
     peak, low by O(h^2)), the upper and lower bodies' velocities (m/s) at the last accepted point
     before the interface's first contact, and at the first accepted point after that contact (NaN
-    until then): in free flight their differences are the approach and separation speeds, which
+    until then), then the scaled times of the first accepted points in and after that first contact
+    (`peaks (7, n)`; NaN until then): in free flight the velocity differences are the approach and separation speeds, which
     gravity does not change between two falling bodies; for the per-design results of a batched solve
     without a step history (`hertz_chain.sweep`). Packed into few arrays: each
     array is a separate operation in every step of the loop.
@@ -168,7 +169,7 @@ class _Contacts(eqx.Module):
                           active & False, jnp.concatenate([jnp.zeros(4), v_top[None], ys[n : 2 * n]]),
                           None if e is None else (e, 0.0 * e),
                           None if e is None else jnp.stack([0.0 * d, v, jnp.concatenate([jnp.zeros(1, v.dtype), v[:-1]]),
-                                                            jnp.nan * d, jnp.nan * d]))
+                                                            jnp.nan * d, jnp.nan * d, jnp.nan * d, jnp.nan * d]))
         was_over, top_done = c.cascade[0] > 0, c.cascade[3] > 0
         frozen = was_over | ((jnp.arange(n) == n - 1) & top_done)
         left = c.now & ~active
@@ -194,9 +195,11 @@ class _Contacts(eqx.Module):
             f = jnp.where(active, stack.forces(d, dd, q), 0.0)
             never = rows[:, 0] < 0  # not yet in contact: the velocities just before the first contact
             first_off = left & jnp.isnan(c.peaks[3])  # the first point after the first contact
+            first_on = (c.rows[:, 0] < 0) & active  # the first point in contact (`rows` already holds it)
             peaks = jnp.stack([jnp.where(frozen, c.peaks[0], jnp.maximum(c.peaks[0], f)),
                                jnp.where(never, v, c.peaks[1]), jnp.where(never, v_lo, c.peaks[2]),
-                               jnp.where(first_off, v, c.peaks[3]), jnp.where(first_off, v_lo, c.peaks[4])])
+                               jnp.where(first_off, v, c.peaks[3]), jnp.where(first_off, v_lo, c.peaks[4]),
+                               jnp.where(first_on & ~frozen, t, c.peaks[5]), jnp.where(first_off, t, c.peaks[6])])
         return _Contacts(rows, now, cascade, e, peaks)
 
 

@@ -41,10 +41,10 @@ from .srs import (DEFAULT_PPC, ShockResponseSpectrum, SRSOptions, _active_sample
                   resample_uniform, srs)
 from .status import Status
 
+from .constants import INDEPENDENT_BELOW  # noqa: E402  (re-exported: the regime threshold)
+
 __all__ = ["INDEPENDENT_BELOW", "RigidComparison", "Report", "analyse", "independence", "wave_speed"]
 
-#: Largest overlap fraction of neighbouring contacts still called "independent" (1 %).
-INDEPENDENT_BELOW = 0.01
 
 
 @dataclasses.dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """Physical constants shared by every module (SI units; no heavy imports, so the CLI stays fast)."""
 
-__all__ = ["STANDARD_GRAVITY", "G0", "MAX_MASSES"]
+__all__ = ["STANDARD_GRAVITY", "G0", "MAX_MASSES", "INDEPENDENT_BELOW"]
 
 STANDARD_GRAVITY = 9.80665
 """Standard acceleration of gravity, m/s² (3rd CGPM 1901; ISO 80000-3). The default `drop.gravity`."""
@@ -12,3 +12,7 @@ MAX_MASSES = 1000
 """The most masses a stack may have (`Stack`, stack files, `hertz-chain design`): long granular chains
 (Nesterenko; Sen; Daraio use 100-1,000 beads). Every per-step operation is linear in n (no n x n work). Defined here, free of
 JAX, so that the stack-file checks and the command line refuse a larger stack before importing it."""
+
+INDEPENDENT_BELOW = 0.01
+"""Largest overlap fraction of neighbouring contacts still called "independent" (1 %): the regime of a
+report (`analysis`) and of a sweep's designs (`sweep`)."""

@@ -287,6 +287,7 @@ def simulate_batch(
         peak_forces=np_(out["peak_forces"]) if "peak_forces" in out else None,
         impact_velocities=np_(out["impact_velocities"]) if "impact_velocities" in out else None,
         restitutions=np_(out["restitutions"]) if "restitutions" in out else None,
+        first_contacts=np_(out["first_contacts"]) if "first_contacts" in out else None,
     )
 
 

@@ -46,6 +46,7 @@ from typing import Any
 
 import numpy as np
 
+from .constants import INDEPENDENT_BELOW
 from .errors import StackFileError
 from .keys import Slot, check_values, dimension, read_bounds, read_entry, resolve, valid_values
 from .stackfile import StackSpec, load_stack_file
@@ -74,6 +75,9 @@ VARIABLES = {  # name -> (units, long name)
     "top_delta_v": ("m s-1", "velocity change of the top mass: launch velocity minus its velocity before its first contact"),
     "top_equivalent_half_sine": ("s", "duration of the half-sine with the top pulse's peak and velocity change"),
     "restitution": ("1", "effective restitution of the interface's first contact: separation over approach speed"),
+    "overlap_fraction": ("1", "largest fraction of the shorter first contact during which two neighbouring "
+                         "interfaces are both closed (0: sequential; step-resolved)"),
+    "regime": ("1", "0 independent (overlap_fraction < 0.01, the rigid theory's assumption), 1 overlapping"),
 }
 #: the extra dimension of a per-mass or per-interface variable
 _EXTRA_DIM = {"velocity_gains": "mass", "peak_force": "interface", "restitution": "interface"}
@@ -392,11 +396,13 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
     dv = sol.launch_velocities[:, -1] - sol.impact_velocities[:, -1]
     with np.errstate(divide="ignore", invalid="ignore"):
         eq_hs = np.where(peak_a > 0, np.pi * dv / (2.0 * peak_a), np.nan)
+    overlap = overlap_fractions(sol.first_contacts, sol.t_final, dm.ground)
     out = {"status": sol.status_code.astype(np.int8), "top_velocity_gain": gains[:, -1], "velocity_gains": gains,
            "rigid_gain": rigid, "rigid_deficit": gains[:, -1] / rigid - 1.0, "energy_error": sol.energy_error,
            "num_steps": sol.num_steps.astype(np.int64), "t_final": sol.t_final,
            "peak_force": sol.peak_forces, "top_peak_g": peak_a / G0, "top_delta_v": dv, "top_equivalent_half_sine": eq_hs,
-           "restitution": sol.restitutions}
+           "restitution": sol.restitutions, "overlap_fraction": overlap,
+           "regime": (overlap >= INDEPENDENT_BELOW).astype(np.int8)}
     if plan.dims == ("design",):
         out["values"] = V
     out = {k: np.asarray(v)[:B] for k, v in out.items()}
@@ -405,9 +411,11 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
 
         out["status"] = np.where(valid, out["status"], np.int8(Status.FAILED)).astype(np.int8)
         for k in ("top_velocity_gain", "velocity_gains", "rigid_gain", "rigid_deficit", "energy_error", "t_final",
-                  "peak_force", "top_peak_g", "top_delta_v", "top_equivalent_half_sine", "restitution"):
+                  "peak_force", "top_peak_g", "top_delta_v", "top_equivalent_half_sine", "restitution",
+                  "overlap_fraction"):
             out[k] = np.where(valid.reshape((-1,) + (1,) * (out[k].ndim - 1)), out[k], np.nan)
         out["num_steps"] = np.where(valid, out["num_steps"], 0)
+        out["regime"] = np.where(valid, out["regime"], -1).astype(np.int8)
     return out
 
 
@@ -432,7 +440,7 @@ def _create_store(path: Path, plan: _Plan, text: str, source: str | None) -> Non
     for name, (units, long_name) in VARIABLES.items():
         extra = (_EXTRA_DIM[name],) if name in _EXTRA_DIM else ()
         shp = shape + ((n,) if extra else ())
-        dtype = np.int8 if name == "status" else (np.int64 if name == "num_steps" else np.float64)
+        dtype = np.int8 if name in ("status", "regime") else (np.int64 if name == "num_steps" else np.float64)
         fill = -1 if dtype is not np.float64 else np.nan
         import dask.array as da
 
@@ -632,6 +640,23 @@ def sweep(path: str | Path, output: str | Path, *, workers: int | None = None, s
     store_counts = {Status(int(c)).text: int(v) for c, v in zip(codes, k) if c >= 0}
     return SweepResult(output, plan.size, plan.n_chunks, len(todo), plan.n_chunks - len(todo),
                        time.perf_counter() - t0, store_counts)
+
+
+def overlap_fractions(first_contacts, t_final, ground: bool) -> np.ndarray:
+    """`(B,)` per design, the largest fraction of the shorter first contact during which two neighbouring
+    interfaces (`j`, `j+1`, sharing mass `j+1`) are both closed: `analysis.independence` from the first
+    contacts' step-resolved `[start, end]` (`BatchSolution.first_contacts`; a contact not over by the end
+    of the run ends at `t_final`); 0 when no two neighbours both touched."""
+    fc = np.asarray(first_contacts, dtype=float)
+    on = fc[..., 0]
+    off = np.where(np.isnan(fc[..., 1]) & np.isfinite(on), np.asarray(t_final, dtype=float)[:, None], fc[..., 1])
+    lo = 0 if ground else 1
+    a_on, a_off, b_on, b_off = on[:, lo:-1], off[:, lo:-1], on[:, lo + 1 :], off[:, lo + 1 :]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        both = np.maximum(0.0, np.minimum(a_off, b_off) - np.maximum(a_on, b_on))
+        shorter = np.minimum(a_off - a_on, b_off - b_on)
+        frac = np.where(np.isfinite(both) & (shorter > 0), both / np.where(shorter > 0, shorter, 1.0), 0.0)
+    return frac.max(axis=1) if frac.shape[1] else np.zeros(len(fc))
 
 
 def _progress(enabled: bool, plan: _Plan, chunks: int):
