@@ -11,6 +11,7 @@ import jax.numpy as jnp
 from . import _config  # noqa: F401  (float64)
 from ._solve import _core, _diffeqsolve, _scaled_field
 from ._solver import _Config
+from ._tracking import T_IN, T_OUT
 
 # ==================================================================== reverse mode: replay the accepted steps
 @eqx.filter_custom_vjp
@@ -30,8 +31,8 @@ def _replay_fwd(perturbed, diff, t1s, scale, T, cfg: _Config):
     # per interface: the history index of the point recorded in `_Contacts.rows` (the first accepted
     # point after its last contact), found by its time (the same float), and whether there is one
     c = core["contacts"]
-    match = sol.ts[0][None, :] == c.rows[:, 1:2]
-    idx, valid = jnp.argmax(match, axis=1), (c.rows[:, 0] >= 0) & ~c.now & jnp.any(match, axis=1)
+    match = sol.ts[0][None, :] == c.rows[:, T_OUT : T_OUT + 1]
+    idx, valid = jnp.argmax(match, axis=1), (c.rows[:, T_IN] >= 0) & ~c.now & jnp.any(match, axis=1)
     return core, (sol.ts[0], sol.ys[0], idx, valid)
 
 

@@ -17,7 +17,20 @@ from . import _config  # noqa: F401  (float64)
 from ._export import cached_jit
 from ._scaling import Scales, _default_t_max, _scales
 from ._solver import _Config
-from ._tracking import _cascade_complete, _end_of_contacts, _launch, _Tracked
+from ._tracking import (
+    PEAK_FORCE,
+    T_FIRST_IN,
+    T_FIRST_OUT,
+    T_IN,
+    V_LOWER_AFTER,
+    V_LOWER_BEFORE,
+    V_UPPER_AFTER,
+    V_UPPER_BEFORE,
+    _cascade_complete,
+    _end_of_contacts,
+    _launch,
+    _Tracked,
+)
 from .stack import Stack, State
 from .status import Status
 
@@ -106,7 +119,7 @@ def _core(sol) -> dict:
     is checked in `_outputs`."""
     c = sol.solver_state[1]
     over, rebounds = c.cascade[0] > 0, c.cascade[1] > 0
-    touched = jnp.any(c.rows[:, 0] >= 0)
+    touched = jnp.any(c.rows[:, T_IN] >= 0)
     done = jnp.where(rebounds, Status.COMPLETE_WITH_REBOUNDS, Status.COMPLETE)
     # the step budget running out is incomplete even after the cascade ended (with until="t_max": the
     # rebounds up to t_max were asked for; the launch data are still those of the cascade)
@@ -174,15 +187,15 @@ def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, launch_only
         out["history"] = (sol.ys[0][:, :n3], sol.ts[0])
     else:
         out["energy_error"] = contacts.energy[1] / sc.energy
-        out["peak_forces"], out["impact_velocities"] = contacts.peaks[0], contacts.peaks[1]
+        out["peak_forces"], out["impact_velocities"] = contacts.peaks[PEAK_FORCE], contacts.peaks[V_UPPER_BEFORE]
         # restitution of the interface's first contact: separation over approach speed, both in free flight
         # (relative speeds unchanged by gravity between two falling bodies); NaN without a finished contact
         pk = contacts.peaks
-        approach, release = pk[2] - pk[1], pk[3] - pk[4]
+        approach, release = pk[V_LOWER_BEFORE] - pk[V_UPPER_BEFORE], pk[V_UPPER_AFTER] - pk[V_LOWER_AFTER]
         ok = jnp.isfinite(release) & (approach > 1e-12 * sc.velocity)
         out["restitutions"] = jnp.where(ok, release / jnp.where(ok, approach, 1.0), jnp.nan)
         # the first contact of every interface, [first point in it, first point after it] (s; step-resolved)
-        out["first_contacts"] = jnp.stack([pk[5], pk[6]], axis=-1) * sc.time
+        out["first_contacts"] = jnp.stack([pk[T_FIRST_IN], pk[T_FIRST_OUT]], axis=-1) * sc.time
     if ts is not None:
         grid = _derived(stack, sol.ys[int(cfg.save_steps)][:, :n3] * scale)
         grid["t"] = ts

@@ -122,6 +122,15 @@ def _cascade_complete(t, ys, args, **kwargs):
     return ys[-1] > 0.5
 
 
+# columns of `_Contacts.rows`: the latest accepted point in contact, then the first point after it (its
+# time, overlap, overlap rate, lower and upper body velocities, memory `q`)
+T_IN, T_OUT, DELTA_OUT, RATE_OUT, V_LOWER_OUT, V_UPPER_OUT, Q_OUT = range(7)
+# rows of `_Contacts.peaks` (audit mode): the largest force, the upper and lower bodies' velocities before and
+# after the first contact, and the first points in and after that contact
+(PEAK_FORCE, V_UPPER_BEFORE, V_LOWER_BEFORE, V_UPPER_AFTER, V_LOWER_AFTER, T_FIRST_IN,
+ T_FIRST_OUT) = range(7)
+
+
 class _Contacts(eqx.Module):
     """Per-interface bookkeeping of the accepted steps, carried in the solver state (`_Tracked`), so
     that launch velocities and the energy audit need no step history (a history of `max_steps` rows is
@@ -181,10 +190,10 @@ class _Contacts(eqx.Module):
         now = jnp.where(frozen, c.now, active)
         over = _cascade_over(t[0], ys, args, x, v, d, dd, active, q)
         if launch and n >= 2:  # `until="launch"`: or as soon as the top mass's launch is final
-            over = over | _top_final(v, d, active, stack, rows[n - 1, 0] >= 0, q)
+            over = over | _top_final(v, d, active, stack, rows[n - 1, T_IN] >= 0, q)
         over = over & ~was_over
         # the top mass's apex: free, pushed before, its velocity turned from up to down
-        apex = ~active[n - 1] & (rows[n - 1, 0] >= 0) & (c.cascade[4] > 0) & (v_top <= 0)
+        apex = ~active[n - 1] & (rows[n - 1, T_IN] >= 0) & (c.cascade[4] > 0) & (v_top <= 0)
         rebound = (c.cascade[1] > 0) | jnp.any(frozen & active & ~c.now)  # closes after it was open
         head = jnp.stack([(was_over | over), rebound, jnp.where(over, t[0], c.cascade[2]),
                           top_done | apex | over, v_top]).astype(d.dtype)
@@ -193,13 +202,14 @@ class _Contacts(eqx.Module):
         if e is not None:  # elementwise, not `.at[].max`: a scatter is a slow unfused operation in the loop
             e = (c.energy[0], jnp.maximum(c.energy[1], jnp.abs(e - c.energy[0])))
             f = jnp.where(active, stack.forces(d, dd, q), 0.0)
-            never = rows[:, 0] < 0  # not yet in contact: the velocities just before the first contact
-            first_off = left & jnp.isnan(c.peaks[3])  # the first point after the first contact
-            first_on = (c.rows[:, 0] < 0) & active  # the first point in contact (`rows` already holds it)
-            peaks = jnp.stack([jnp.where(frozen, c.peaks[0], jnp.maximum(c.peaks[0], f)),
-                               jnp.where(never, v, c.peaks[1]), jnp.where(never, v_lo, c.peaks[2]),
-                               jnp.where(first_off, v, c.peaks[3]), jnp.where(first_off, v_lo, c.peaks[4]),
-                               jnp.where(first_on & ~frozen, t, c.peaks[5]), jnp.where(first_off, t, c.peaks[6])])
+            never = rows[:, T_IN] < 0  # not yet in contact: the velocities just before the first contact
+            first_off = left & jnp.isnan(c.peaks[V_UPPER_AFTER])  # the first point after the first contact
+            first_on = (c.rows[:, T_IN] < 0) & active  # the first point in contact (`rows` already holds it)
+            pk = c.peaks
+            peaks = jnp.stack([jnp.where(frozen, pk[PEAK_FORCE], jnp.maximum(pk[PEAK_FORCE], f)),
+                               jnp.where(never, v, pk[V_UPPER_BEFORE]), jnp.where(never, v_lo, pk[V_LOWER_BEFORE]),
+                               jnp.where(first_off, v, pk[V_UPPER_AFTER]), jnp.where(first_off, v_lo, pk[V_LOWER_AFTER]),
+                               jnp.where(first_on & ~frozen, t, pk[T_FIRST_IN]), jnp.where(first_off, t, pk[T_FIRST_OUT])])
         return _Contacts(rows, now, cascade, e, peaks)
 
 
@@ -274,12 +284,12 @@ def _end_of_contacts(stack: Stack, c: _Contacts, time_scale, t_final):
     `t_final` if still in contact at the end. Differentiable through a final Newton step."""
     n = stack.n
     cols = jnp.arange(n)
-    ever = c.rows[:, 0] >= 0
+    ever = c.rows[:, T_IN] >= 0
     ended = ever & ~c.now
-    t_k = jnp.where(ended, c.rows[:, 0] * time_scale, 0.0)
-    t_r = jnp.where(ended, c.rows[:, 1] * time_scale, 0.0)
-    d_r, dd_r = jnp.where(ended, c.rows[:, 2], 0.0), jnp.where(ended, c.rows[:, 3], 0.0)
-    q_r = c.rows[:, 6] if stack.has_memory else None  # the memory after the contact (constant while open)
+    t_k = jnp.where(ended, c.rows[:, T_IN] * time_scale, 0.0)
+    t_r = jnp.where(ended, c.rows[:, T_OUT] * time_scale, 0.0)
+    d_r, dd_r = jnp.where(ended, c.rows[:, DELTA_OUT], 0.0), jnp.where(ended, c.rows[:, RATE_OUT], 0.0)
+    q_r = c.rows[:, Q_OUT] if stack.has_memory else None  # the memory after the contact (constant while open)
     curv = jnp.where((cols == 0) & stack.ground, stack.gravity, 0.0)  # ground: delta_0 = -x_1 is a parabola
     lo0 = jnp.where(ended, t_k - t_r, -1.0)
 
@@ -315,8 +325,8 @@ def _launch(stack: Stack, c: _Contacts, time_scale, t_end_if, t_final, v_final):
     t_end = jnp.where(use_above, above, t_end_if)
     j = jnp.where(use_above, jnp.arange(n) + 1, jnp.arange(n))  # the interface of the last push
     jc = jnp.minimum(j, n - 1)
-    rec_v = jnp.where(use_above, c.rows[jc, 4], c.rows[jc, 5])
-    t_r = c.rows[jc, 1] * time_scale
+    rec_v = jnp.where(use_above, c.rows[jc, V_LOWER_OUT], c.rows[jc, V_UPPER_OUT])
+    t_r = c.rows[jc, T_OUT] * time_scale
     pushed_now = c.now[jc]
     v_launch = jnp.where(pushed_now, v_final, rec_v + stack.gravity * (t_r - t_end))
     return t_end, jnp.where(jnp.isnan(t_end), jnp.nan, v_launch)
