@@ -67,6 +67,8 @@ VARIABLES = {  # name -> (units, long name)
     "velocity_gains": ("1", "launch velocity of each mass over the drop speed"),
     "rigid_gain": ("1", "rigid independent-collision gain, seed paper Eq 19, nominal restitutions"),
     "rigid_deficit": ("1", "top_velocity_gain / rigid_gain - 1"),
+    "rigid_gain_measured": ("1", "rigid independent-collision gain, seed paper Eq 19, with each interface's measured "
+                            "restitution (NaN unless every interface has one)"),
     "energy_error": ("1", "largest relative energy-audit error"),
     "num_steps": ("1", "solver steps"),
     "t_final": ("s", "end time of the run"),
@@ -390,6 +392,12 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
         rigid = np.asarray(stack_gain(masses, np.where(np.isfinite(e), e, 1.0)), dtype=float)
     else:
         rigid = np.full(len(X), np.nan)
+    rigid_measured = np.full(len(X), np.nan)
+    e_meas = np.asarray(sol.restitutions, dtype=float)
+    have = np.all(np.isfinite(e_meas), axis=1) & dm.ground
+    if np.any(have):  # interfaces' e clipped to 1 (an elastic contact measures 1 +- round-off); the ground's may exceed it
+        e_use = np.concatenate([e_meas[have, :1], np.clip(e_meas[have, 1:], 0.0, 1.0)], axis=1)
+        rigid_measured[have] = stack_gain(masses[have], e_use)
     from .constants import G0
 
     peak_a = sol.peak_forces[:, -1] / masses[:, -1]  # the top mass has one contact: the interface below it
@@ -398,7 +406,8 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
         eq_hs = np.where(peak_a > 0, np.pi * dv / (2.0 * peak_a), np.nan)
     overlap = overlap_fractions(sol.first_contacts, sol.t_final, dm.ground)
     out = {"status": sol.status_code.astype(np.int8), "top_velocity_gain": gains[:, -1], "velocity_gains": gains,
-           "rigid_gain": rigid, "rigid_deficit": gains[:, -1] / rigid - 1.0, "energy_error": sol.energy_error,
+           "rigid_gain": rigid, "rigid_deficit": gains[:, -1] / rigid - 1.0, "rigid_gain_measured": rigid_measured,
+           "energy_error": sol.energy_error,
            "num_steps": sol.num_steps.astype(np.int64), "t_final": sol.t_final,
            "peak_force": sol.peak_forces, "top_peak_g": peak_a / G0, "top_delta_v": dv, "top_equivalent_half_sine": eq_hs,
            "restitution": sol.restitutions, "overlap_fraction": overlap,
@@ -410,7 +419,8 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
         from .status import Status
 
         out["status"] = np.where(valid, out["status"], np.int8(Status.FAILED)).astype(np.int8)
-        for k in ("top_velocity_gain", "velocity_gains", "rigid_gain", "rigid_deficit", "energy_error", "t_final",
+        for k in ("top_velocity_gain", "velocity_gains", "rigid_gain", "rigid_deficit", "rigid_gain_measured",
+                  "energy_error", "t_final",
                   "peak_force", "top_peak_g", "top_delta_v", "top_equivalent_half_sine", "restitution",
                   "overlap_fraction"):
             out[k] = np.where(valid.reshape((-1,) + (1,) * (out[k].ndim - 1)), out[k], np.nan)
