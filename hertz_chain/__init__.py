@@ -5,12 +5,11 @@ of the seed paper, `hertz_chain.calibration` every restitution map, ...). See RE
 architecture and conventions.
 """
 
-from __future__ import annotations
 
-import importlib
-import sys
-import types
-from typing import TYPE_CHECKING
+import importlib as _importlib
+import sys as _sys
+import types as _types
+from typing import TYPE_CHECKING as _TYPE_CHECKING
 
 # Public name -> the submodule that defines it. Resolved on first use (PEP 562), so that
 # `import hertz_chain` and `hertz-chain --help` do not pay for importing JAX and diffrax.
@@ -130,7 +129,7 @@ def __getattr__(name: str):
     module = _EXPORTS.get(name)
     if module is None:
         raise AttributeError(f"module 'hertz_chain' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    value = getattr(_importlib.import_module(f".{module}", __name__), name)
     globals()[name] = value
     return value
 
@@ -139,21 +138,21 @@ def __dir__():
     return sorted(set(globals()) | set(_EXPORTS))
 
 
-class _Package(types.ModuleType):
+class _Package(_types.ModuleType):
     """Keeps the functions `simulate`, `srs`, `build`, `optimize`, `fit` and `sweep` from being shadowed by their submodules of
     the same name when the import system binds a loaded submodule onto the package (as the eager
     `from .simulate import simulate` of a classic `__init__` would)."""
 
     def __setattr__(self, name, value):
-        if isinstance(value, types.ModuleType) and _EXPORTS.get(name) == name:
+        if isinstance(value, _types.ModuleType) and _EXPORTS.get(name) == name:
             value = getattr(value, name)
         super().__setattr__(name, value)
 
 
-sys.modules[__name__].__class__ = _Package
+_sys.modules[__name__].__class__ = _Package
 
 
-if TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
+if _TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
     from .analysis import Report, RigidComparison, accelerometer, analyse, independence
     from .build import Built, build
     from .calibration import (

@@ -152,9 +152,12 @@ def _outputs(stack: Stack, sc: Scales, scale, core: dict, until: str = "cascade"
     t_end_if = _end_of_contacts(stack, c, sc.time, t_c)
     t_end, v_launch = _launch(stack, c, sc.time, t_end_if, t_c, v_c)
     status = core["status"]
-    # a chain held by an end force never flies apart: its run ends at t_max by design (until="t_max")
+    # a chain held by an end force or a wall never flies apart: its run ends at t_max by design
+    # (until="t_max"), and its "launch" velocities are the velocities there
     held = (stack.end_force > 0) | stack.wall
     status = jnp.where((status == Status.INCOMPLETE_T_MAX) & held, Status.COMPLETE, status)
+    v_launch = jnp.where(held, v_fin, v_launch)
+    t_end = jnp.where(held, t_fin, t_end)
     status = jnp.where(jnp.all(jnp.isfinite(y_fin)) | (status == Status.INCOMPLETE_MAX_STEPS), status,
                        Status.FAILED)
     return dict(

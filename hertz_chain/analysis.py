@@ -32,7 +32,7 @@ import warnings
 
 import numpy as np
 
-from .episodes import ContactEpisode, contact_episodes, hermite_slope, refined_peak
+from .episodes import ContactEpisode, contact_episodes, hermite_slope, parabolic_peak, refined_peak
 from .errors import HertzChainError, ParameterError, SolverError
 from .pulse import G0, PulseMetrics, pulse_metrics
 from .rigid import chain_gain, stack_gain
@@ -151,6 +151,10 @@ def _main_restitution(episodes, n: int, v_ref: float) -> np.ndarray:
 
 def _rigid_comparison(sol, e_meas, e_nom, v_ref) -> RigidComparison:
     stack = sol.stack
+    if stack.held:  # never flies apart: no launch, no rigid cascade to compare with
+        return RigidComparison(None, None, None, None if e_nom is None else np.asarray(e_nom, dtype=float),
+                               e_meas, ("a chain held by an end force or confined by a far wall: the rigid "
+                                        "cascade does not apply",))
     m = np.asarray(stack.masses, dtype=float)
     n, ground = m.size, stack.ground
     x0 = np.asarray(sol.state.positions, dtype=float)
@@ -321,6 +325,8 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     v0 = np.asarray(sol.state.velocities, dtype=float)
     v_ref = float(np.max(np.abs(v0)))
     e_meas = _main_restitution(episodes, n, v_ref)
+    if stack.held:  # its contacts stay loaded or are struck again: no single impact to measure e on
+        e_meas = np.full(n, np.nan)
     launch = np.asarray(sol.launch_velocities, dtype=float)
     # no drop speed (a stack released at rest): no gain is defined, the launch velocities still are
     gains = launch / v_ref if v_ref > 0 else np.full(n, np.nan)
@@ -376,9 +382,18 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
         peak_velocities=peak_v,
         peak_velocity_times=peak_t,
         wave_speed=speed,
-        wall_peak_force=float(np.max(np.asarray(stack.wall_force(np.asarray(st.positions))))) if stack.wall
-        else float("nan"),
+        wall_peak_force=_wall_peak(stack, st),
     )
+
+
+def _wall_peak(stack, st) -> float:
+    """The far wall's largest force on the top mass (N): the parabola through the largest step sample and
+    its neighbours (`episodes.parabolic_peak`); NaN without a wall."""
+    if not stack.wall:
+        return float("nan")
+    t = np.asarray(st.t, dtype=float)
+    f = np.asarray(stack.wall_force(np.asarray(st.positions)), dtype=float)
+    return max(parabolic_peak(t, f, 0, len(t) - 1)[1], float(f.max()))
 
 
 def _yield_warnings(stack, strongest: dict, yield_limits) -> list[str]:
@@ -458,9 +473,10 @@ def _warnings(sol, e_meas, e_nom, regime, tolerances) -> list[str]:
     held = sol.stack.held
     if held:
         f0 = float(np.asarray(sol.stack.end_force))
-        what = " and ".join(([f"an end force ({f0:g} N)"] if f0 > 0 else []) + (["a far wall"] if sol.stack.wall else []))
+        what = " and ".join(([f"an end force ({f0:g} N)"] if f0 > 0 else [])
+                            + (["confined by a far wall"] if sol.stack.wall else []))
         out.append(f"a chain held by {what} never flies apart: its 'launch' velocities and gains are the "
-                   "velocities at t_max, its contacts stay loaded (no e_eff), and the rigid comparison does not apply")
+                   "velocities at t_max, no e_eff is measured, and the rigid comparison does not apply")
     if np.isfinite(sol.energy_error) and sol.energy_error > ENERGY_WARN:
         out.append(f"energy audit: |E(t) - E(0)| reached {sol.energy_error:.2e} of the drop energy "
                    f"(> {ENERGY_WARN:g}): tighten solver.rtol/atol")

@@ -76,7 +76,12 @@ def _with_wall(spec: StackSpec, stack: Stack, state: State, laws, interfaces) ->
     k_w = w.stiffness
     if k_w is None:
         top = _material(spec, bodies.material_list(n)[-1])
-        k_w = contact_stiffness(top, _material(spec, w.material), bodies.radius_list(n)[-1], None)
+        try:
+            wall = _material(spec, w.material)
+        except ParameterError as exc:
+            raise StackFileError(f"wall.material: {w.material!r} is unknown; {exc.allowed}, or a [materials.NAME] "
+                                 "of the file") from None
+        k_w = contact_stiffness(top, wall, bodies.radius_list(n)[-1], None)
     x_top = float(state.positions[-1])
     f0 = bodies.end_force
     x_w = x_top - (f0 / k_w) ** (2.0 / 3.0) if f0 > 0 else x_top + (w.gap or 0.0)
@@ -191,8 +196,9 @@ def _law(cs: ContactSpec, stiffness: float, m_eff: float, v_c: float | None,
     for key in row.from_materials:  # e.g. thornton's yield_pressure from the softer body's Y
         if key not in params:
             if limit is None:
-                raise ParameterError(key, None, "a value in the file, or stack.material with a yield strength "
-                                     "(yield_strength_Pa in the material table or [materials.NAME])")
+                raise StackFileError(f"{cs.source}.{key}: missing, and the interface's materials have no yield "
+                                     "strength (the table gives none for cemented carbide and polymers); give "
+                                     f"{key}, or yield_strength in [materials.NAME]")
             params[key] = getattr(limit, key)
     for key in row.context:  # e.g. jackson-green's Poisson ratio, the yielding body's when known
         if limit is not None:

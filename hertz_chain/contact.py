@@ -769,6 +769,12 @@ class JacksonGreen(_ElasticPlastic):
         if not -1.0 < nu <= 0.5:
             raise ParameterError("poisson_ratio", nu, "in (-1, 0.5]")
         law = cls(k, R, s_y, nu, 1.9, clamp)
+        e_star = 0.75 * k / math.sqrt(R)
+        strain = s_y / e_star
+        if strain >= 1.0 or law._find_switch() is None:
+            raise ParameterError("yield_strength", s_y, f"well below E' = {e_star:.4g} Pa: at the yield strain "
+                                 f"S_y/E' = {strain:.3g} Jackson & Green's fit starts below Hertz (at 1.9 w_c), "
+                                 "outside the metals' range it was fitted on; use thornton, or a smaller yield_strength")
         return cls(k, R, s_y, nu, law._find_switch(), clamp)
 
     # ---------------------------------------------------------------- the published fit
@@ -791,8 +797,8 @@ class JacksonGreen(_ElasticPlastic):
                    + 4.0 * hg / c * (1.0 - jnp.exp(-(ws ** (5.0 / 9.0)) / 25.0)) * ws)
         return p, a
 
-    def _find_switch(self) -> float:
-        """The first ``w* >= 1.9`` where the fit meets Hertz (1.9 if it starts below Hertz)."""
+    def _find_switch(self) -> float | None:
+        """The first ``w* >= 1.9`` where the fit meets Hertz; None when it starts below Hertz (a force jump)."""
         from scipy.optimize import brentq
 
         _, _, w_c, _ = (float(x) for x in self._scales())
@@ -800,8 +806,9 @@ class JacksonGreen(_ElasticPlastic):
         def gap(ws):
             return float(self._fit(jnp.asarray(ws * w_c))[0]) - float(self.k) * (ws * w_c) ** 1.5
 
-        if gap(1.9) <= 0:
-            return 1.9
+        g = gap(1.9)
+        if not np.isfinite(g) or g <= 0:
+            return None
         return brentq(gap, 1.9, 100.0, xtol=1e-14, rtol=1e-14)
 
     def loading_force(self, delta: ArrayLike) -> Array:
@@ -917,8 +924,9 @@ def make_law(
 
     **Arguments** (SI units; all but ``name`` keyword-only):
 
-    - ``name``: one of `LAW_NAMES`: ``"hertz"``, ``"hunt-crossley"``, ``"tsuji"``,
-      ``"kelvin-voigt"``, ``"viscoelastic"``.
+    - ``name``: one of `LAW_NAMES` (`registry.LAWS`): ``"hertz"``, ``"hunt-crossley"``, ``"tsuji"``,
+      ``"kelvin-voigt"``, ``"viscoelastic"``, ``"hertz-dashpot"``, ``"power"``, ``"thornton"``,
+      ``"jackson-green"``.
     - ``stiffness``: ``k`` > 0, N/m^1.5 (Hertzian laws) or N/m (``kelvin-voigt``).
     - Damping, **either** ``restitution`` ``e`` in (0, 1] **or** the law's own parameter:
 

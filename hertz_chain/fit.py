@@ -256,7 +256,7 @@ class _Model:
     def __init__(self, spec, slots, t, measured, cfc):
         from ._design import DesignMap
 
-        self.dm = DesignMap(spec, slots)
+        self.dm = DesignMap(spec, slots, section="fit.vary")
         self.opts = dict(self.dm.built.simulate_options, throw=False,
                          tolerances=_tight(self.dm.built.simulate_options.get("tolerances")))
         self.g = float(self.dm.gravity)

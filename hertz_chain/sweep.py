@@ -65,7 +65,8 @@ VARIABLES = {  # name -> (units, long name)
                "4 no contact, 5 failed)"),
     "top_velocity_gain": ("1", "launch velocity of the top mass over the drop speed"),
     "velocity_gains": ("1", "launch velocity of each mass over the drop speed"),
-    "rigid_gain": ("1", "rigid independent-collision gain, seed paper Eq 19, nominal restitutions"),
+    "rigid_gain": ("1", "rigid independent-collision gain, seed paper Eq 19, nominal restitutions (NaN where a law "
+                   "has none: a speed-dependent raw damping, a plastic law)"),
     "rigid_deficit": ("1", "top_velocity_gain / rigid_gain - 1"),
     "rigid_gain_measured": ("1", "rigid independent-collision gain, seed paper Eq 19, with each interface's measured "
                             "restitution (NaN unless every interface has one)"),
@@ -388,10 +389,12 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
     gains = sol.launch_velocities / speed[:, None]
     masses = np.asarray(fields["stack.masses"])
     e = np.asarray(fields["contact.restitution"])
-    if dm.ground:  # paper Eq 19 with the nominal restitutions (1 where a law gives none: elastic or raw)
-        rigid = np.asarray(stack_gain(masses, np.where(np.isfinite(e), e, 1.0)), dtype=float)
-    else:
-        rigid = np.full(len(X), np.nan)
+    # paper Eq 19 with the nominal restitutions (elastic laws: 1); NaN where a law has none (a raw damping whose e
+    # depends on the speed, a plastic law)
+    rigid = np.full(len(X), np.nan)
+    nominal = np.all(np.isfinite(e[:, 0 if dm.ground else 1 :]), axis=1) & dm.ground
+    if np.any(nominal):
+        rigid[nominal] = stack_gain(masses[nominal], e[nominal])
     rigid_measured = np.full(len(X), np.nan)
     e_meas = np.asarray(sol.restitutions, dtype=float)
     have = np.all(np.isfinite(e_meas), axis=1) & dm.ground

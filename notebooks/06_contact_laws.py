@@ -82,7 +82,7 @@ def _jg(s_y):
     return hc.make_law("jackson-green", stiffness=K, yield_strength=s_y, effective_radius=R_JG)
 
 
-S_Y = brentq(lambda s: float(_jg(s).restitution_at(VC, M)) - E, 1e6, 1e9, rtol=1e-10)
+S_Y = brentq(lambda s: float(_jg(s).restitution_at(VC, M)) - E, 1e6, 2e8, rtol=1e-10)  # below ~2.1e8 Pa: the fit's range
 laws["jackson-green"] = _jg(S_Y)
 print(f"jackson-green: S_y = {S_Y / 1e6:.2f} MPa gives e = {E} at {VC} m/s")
 laws = {name: laws[name] for name in hc.LAW_NAMES if name in laws}  # the registry's order

@@ -338,3 +338,35 @@ def test_jackson_green_restitution_through_file_build_and_simulate(tmp_path, rat
     assert (v2 - v1) / V == pytest.approx(e_ref, rel=1e-6)
     assert e_ref < 0.99  # plastic: the peak passed 1.9 w_c (w*/w_c ~ ratio^{4/5} >= 2.4)
     assert float(built.stack.law_of(1).restitution_at(V, m_eff)) == pytest.approx(e_ref, rel=1e-8)
+
+
+def test_jackson_green_refuses_a_yield_strain_outside_its_fit_and_materials_without_yield(tmp_path):
+    from hertz_chain.errors import ParameterError
+
+    k, r = 1e10, 5e-3  # E' = 106 GPa
+    with pytest.raises(ParameterError, match=r"yield_strength.*yield strain.*below Hertz"):
+        hc.make_law("jackson-green", stiffness=k, yield_strength=5e9, effective_radius=r)
+    with pytest.raises(ParameterError, match=r"yield_strength"):
+        hc.make_law("jackson-green", stiffness=k, yield_strength=500e9, effective_radius=r)
+    doc = {"drop": {"impact_velocity": "1 m/s"}, "stack": {"masses": ["4 g"], "material": "pmma", "radius": "5 mm"},
+           "contact": {"law": "jackson-green"}}
+    p = tmp_path / "pmma.toml"
+    p.write_text(tomli_w.dumps(doc))
+    with pytest.raises(StackFileError, match=r"contact\.yield_strength: missing.*no yield strength") as exc:
+        hc.build(hc.load_stack_file(p))
+    assert "None" not in str(exc.value)
+
+
+def test_fit_and_sweep_design_maps_take_a_plastic_law(tmp_path):
+    from hertz_chain._design import DesignMap
+
+    doc = {"drop": {"impact_velocity": "1 m/s"}, "stack": {"masses": ["4 g"], "radius": "5 mm"},
+           "contact": {"law": "thornton", "stiffness": "1e10 N/m^1.5", "yield_pressure": "1 GPa"}}
+    p = tmp_path / "t.toml"
+    p.write_text(tomli_w.dumps(doc))
+    spec = hc.load_stack_file(p)
+    for section in ("fit.vary", "sweep.axis"):
+        dm = DesignMap(spec, (), section=section)
+        assert dm.n == 1
+    with pytest.raises(StackFileError, match=r"optimize\.vary: contact law 'thornton'"):
+        DesignMap(spec, (), section="optimize.vary")

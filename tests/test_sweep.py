@@ -274,6 +274,8 @@ def test_a_thornton_sphere_swept_over_speed_and_stiffness_meets_thorntons_closed
             # accuracy (measured up to 1.6e-7)
             assert float(ds.restitution[i, j, 0]) == pytest.approx(e, rel=1e-6)
             assert int(ds.status[i, j]) == 0
+    assert np.all(np.isnan(ds.rigid_gain))  # a plastic law has no nominal restitution for Eq 19
+    np.testing.assert_allclose(ds.rigid_gain_measured, ds.restitution[..., 0], rtol=1e-12)  # Eq 19 for n = 1: G = e
 
 
 def test_overlap_fraction_and_regime_per_design_match_the_report(tmp_path):
