@@ -40,7 +40,8 @@ Exit status (`hertz_chain.status.Status.exit_code`):
 
 After a run that is not `ok` the table/JSON and the outputs are still written (marked partial), then one
 line `hertz-chain: <status>: <hint>` goes to stderr. Each warning of the run is one line
-`hertz-chain: warning: ...` on stderr. Running `hertz-chain` without arguments prints the help and exits
+`hertz-chain: warning: ...` on stderr (not when stdout and stderr are the same terminal: the report
+already lists them). Running `hertz-chain` without arguments prints the help and exits
 with status 2.
 """
 
@@ -300,8 +301,10 @@ def simulate(
             _paths.write_atomically(plot, lambda tmp: plotting.plot_report(result, tmp), force, "--plot")
     except HertzChainError as exc:
         _fail(str(exc))
-    for warning in getattr(result, "warnings", None) or ():
-        typer.echo(f"hertz-chain: warning: {_one_line(warning)}", err=True)
+    # the report on stdout lists its warnings; repeat them on stderr unless both go to the same terminal
+    if not (sys.stdout.isatty() and sys.stderr.isatty()):
+        for warning in getattr(result, "warnings", None) or ():
+            typer.echo(f"hertz-chain: warning: {_one_line(warning)}", err=True)
     status = result.status
     if not status.ok:
         hint = status.hint(spec.solver.max_steps)

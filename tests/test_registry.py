@@ -52,7 +52,8 @@ def _law_lines(row: registry.LawRow, e: float | None) -> str:
     if e is not None and row.damping is not None:
         lines.append(f"restitution = {e}")
     values = {"pressure": '"2 GPa"', "dimensionless": "1.5"}  # a row's further keys (`LawRow.params`)
-    lines += [f"{key} = {values[dim]}" for key, dim in row.params]
+    by_key = {"yield_strength": '"100 MPa"'}  # a yield strain in jackson-green's range (E' = 15 GPa here)
+    lines += [f"{key} = {by_key.get(key, values[dim])}" for key, dim in row.params]
     return "\n".join(lines)
 
 
