@@ -148,7 +148,7 @@ def test_cli_simulates_a_precompressed_chain(tmp_path):
     import json
     from hertz_chain.cli import app
 
-    path = _file(tmp_path, _chain_doc(n=4, t_max="0.2 ms"))
+    path = _file(tmp_path, _chain_doc())  # the structure of the scipy test above: its compiled solver is reused
     res = CliRunner().invoke(app, ["simulate", str(path), "--json"])
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
@@ -171,7 +171,7 @@ def test_chain_between_two_walls_from_a_stack_file_matches_scipy(tmp_path):
     rest = hc.State(built.state.positions, np.zeros(n))
     assert float(built.stack.wall_force(rest.positions)) == pytest.approx(f0, rel=1e-12)
     # the report's largest wall force is the scipy trajectory's (at the steps: within the sampling)
-    report = hc.analyse(hc.simulate(built.stack, built.state, **built.simulate_options))
+    report = hc.analyse(sol)
     t_fine = np.linspace(0.0, 4e-4, 4001)
     x_ref = _scipy_chain(np.full(n, m), k, f0, G, v_top, t_fine, k_wall=k_w, positions=True)
     x_wall = float(built.stack.wall_position)
