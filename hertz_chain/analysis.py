@@ -96,7 +96,7 @@ class Report:
     solution: object = dataclasses.field(repr=False, default=None)
     peak_velocities: np.ndarray | None = None  # (n,) each mass's largest upward velocity in the first cascade
     peak_velocity_times: np.ndarray | None = None  # (n,) and when (Hermite-refined with the accelerations)
-    wave_speed: float = float("nan")  # contacts per second along the chain, + toward the top (`wave_speed`)
+    wave_speed: float = float("nan")  # contacts/s along a touching chain of >= 8 masses, + up (`wave_speed`)
     wall_peak_force: float = float("nan")  # the far wall's largest force on the top mass at the steps (N; [wall])
 
     @property
@@ -353,7 +353,10 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     for ep in episodes:
         if ep.interface not in strongest or ep.peak_force > strongest[ep.interface].peak_force:
             strongest[ep.interface] = ep
-    speed = wave_speed([strongest[j].peak_force_time if j in strongest else np.nan for j in range(n)])
+    x0 = np.asarray(sol.state.positions, dtype=float)
+    touching = n >= 8 and bool(np.all(np.diff(x0) <= 0))  # a granular chain: touching or precompressed beads
+    speed = wave_speed([strongest[j].peak_force_time if j in strongest else np.nan for j in range(n)]) \
+        if touching else float("nan")
     return Report(
         status=sol.status,
         drop_speed=v_ref,
