@@ -219,6 +219,8 @@ def summary_table(report: Report, title: str | None = None) -> str:
         lines.append(f"top SRS (Q = {s_.Q:g}{what}): max {value} at {s_.frequencies_Hz[k]:,.0f} Hz")
     lines.append(f"regime: {r.regime} (neighbouring contacts overlap {r.independence:.1%} of the "
                  "shorter contact time; the rigid theory assumes 0%)")
+    if np.isfinite(r.wall_peak_force):
+        lines.append(f"far wall: peak force {r.wall_peak_force:,.6g} N on the top mass")
     if np.isfinite(r.wave_speed):
         way = "up, toward the top mass" if r.wave_speed > 0 else "down, toward mass 1"
         lines.append(f"wave: {abs(r.wave_speed):,.6g} contacts/s {way} (peak-force times of the middle half of "
@@ -378,15 +380,22 @@ def write_output(report: Report, path: str | Path, meta: dict | None = None) -> 
         ds.to_netcdf(path, engine="h5netcdf", encoding=encoding)
     else:
         st, sampling = _history(report)
-        a = st.accelerations[:, -1] + float(report.solution.stack.gravity)
-        table = np.column_stack([st.t, a, a / G0, st.velocities[:, -1]])
+        stack = report.solution.stack
+        a = st.accelerations[:, -1] + float(stack.gravity)
+        columns = [st.t, a, a / G0, st.velocities[:, -1]]
+        names, described = "time_s,accelerometer_mps2,accelerometer_g,velocity_mps", ""
+        if stack.wall:  # a chain between two walls: the far wall's force on the top mass too
+            columns.append(np.asarray(stack.wall_force(np.asarray(st.positions))))
+            names, described = names + ",wall_force_N", "; force of the far wall on it (N)"
+        table = np.column_stack(columns)
         m = _metadata(meta)
         head = [f"{m['title']}", f"input file: {m['source_file'] or '(none)'}", f"written by {m['version']}; {m['history']}",
                 f"top mass (mass {len(report.masses)}), {model_label(report)} model; time sampling: {sampling}",
-                "columns: time (s); accelerometer a + g (m/s^2); the same in g (9.80665 m/s^2); velocity (m/s, upward)"]
+                "columns: time (s); accelerometer a + g (m/s^2); the same in g (9.80665 m/s^2); velocity (m/s, upward)"
+                + described]
         with open(path, "w", encoding="utf-8") as f:
             f.writelines(f"# {line}\n" for line in head)
-            f.write("time_s,accelerometer_mps2,accelerometer_g,velocity_mps\n")
+            f.write(names + "\n")
             np.savetxt(f, table, delimiter=",")
 
 

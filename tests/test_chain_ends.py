@@ -178,6 +178,16 @@ def test_chain_between_two_walls_from_a_stack_file_matches_scipy(tmp_path):
     f_ref = k_w * np.maximum(x_ref[:, -1] - x_wall, 0.0) ** 1.5
     assert report.wall_peak_force == pytest.approx(f_ref.max(), rel=1e-4)  # refined between steps
     assert report.wall_peak_force > 2 * f0  # the wave reached the wall
+    # the text report and the CSV carry the wall force too (the same values as the JSON / the positions give)
+    from hertz_chain.report import summary_table, write_output
+
+    assert f"far wall: peak force {report.wall_peak_force:,.6g} N" in summary_table(report)
+    write_output(report, tmp_path / "wall.csv")
+    rows = np.loadtxt(tmp_path / "wall.csv", delimiter=",", comments="#", skiprows=6)
+    header = (tmp_path / "wall.csv").read_text().splitlines()[5]
+    assert header.endswith(",wall_force_N") and rows.shape[1] == 5
+    assert 2 * f0 < rows[:, 4].max() <= report.wall_peak_force * (1 + 1e-12)  # sampled on the 10 us grid
+    assert rows[0, 4] == pytest.approx(f0, rel=1e-9)  # at rest the wall carries the end force
 
 
 def test_one_bead_bounces_between_the_ground_and_a_wall_with_hertz_contact_times(tmp_path):
