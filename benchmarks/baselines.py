@@ -1,7 +1,7 @@
 """Compiled baselines of project issue 22: what an expert user would pick instead of hertz_chain.
 
 The same equations as the library (a stack of masses with Hertz or clamped Tsuji contacts, the scaled
-state `[x, v, D]` of `hertz_chain.simulate`'s docstring, g = 0, the benchmark cases of `cases.py`), written
+state `[x, v, D]` of `hertz_chain.simulation`'s docstring, g = 0, the benchmark cases of `cases.py`), written
 as a numba `@njit` right-hand side, checked against the library's own scaled vector field at random states
 (to 1e-12), and integrated by
 
@@ -40,7 +40,7 @@ import cases  # noqa: E402
 from methods import MAX_STEP, DiffraxCase, fine_grid, find_matched, median_time, rel_err, steps_budget  # noqa: E402
 
 import hertz_chain as hc  # noqa: E402
-from hertz_chain.simulate import _scaled_field, _scales  # noqa: E402
+from hertz_chain.simulation import _scaled_field, _scales  # noqa: E402
 
 MATCH = 1e-7
 FIRST_STEP = hc.Tolerances().first_step  # scaled units, the library default

@@ -1,7 +1,7 @@
 """Runners: diffrax through the public `hertz_chain` API, and scipy `solve_ivp` on the same scaled
 vector field (the library's `_scaled_field`, compiled with `jax.jit`; Jacobian by `jax.jacfwd`, compiled).
 
-Both integrate the same dimensionless state (`hertz_chain.simulate` docstring: time in contact times
+Both integrate the same dimensionless state (`hertz_chain.simulation` docstring: time in contact times
 `T`, lengths in peak overlaps `L`, velocities in drop speeds `V`, energies in `E`) with the same
 `rtol = atol`, the same largest step (`Tolerances.max_step = 0.5 T`) and the same RMS error norm, so a
 tolerance means the same thing for every method.
@@ -19,7 +19,7 @@ from scipy.integrate import solve_ivp
 from scipy.integrate._ivp import radau as _radau, rk as _rk
 
 import hertz_chain as hc
-from hertz_chain.simulate import _scaled_field, _scales  # the library's own scaled vector field
+from hertz_chain.simulation import _scaled_field, _scales  # the library's own scaled vector field
 
 DIFFRAX_METHODS = ("tsit5", "tsit5-diffrax", "dopri8", "kvaerno5")
 SCIPY_METHODS = ("DOP853", "Radau", "LSODA")
@@ -49,7 +49,7 @@ def steps_budget(steps: int) -> int:
 
 # ============================================================================ diffrax
 class DiffraxCase:
-    """One design integrated by diffrax through `hertz_chain.simulate` / `launch_velocity`."""
+    """One design integrated by diffrax through `hertz_chain.simulation` / `launch_velocity`."""
 
     def __init__(self, stack, state):
         self.stack, self.state = stack, state

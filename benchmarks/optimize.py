@@ -64,7 +64,7 @@ def main(argv=None) -> int:
     import hertz_chain as hc
     from hertz_chain._design import DesignMap
     from hertz_chain.keys import resolve
-    from hertz_chain.optimize import _Evaluator, optimize, prepare
+    from hertz_chain.optimization import _Evaluator, optimize, prepare
     from hertz_chain.stackfile import parse_stack
 
     lines = [f"# `hertz-chain optimize` benchmarks (issue 18)", "",

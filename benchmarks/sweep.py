@@ -55,8 +55,8 @@ def main(argv=None) -> int:
 
     import jax
 
-    from hertz_chain.simulate import simulate_batch
-    from hertz_chain.sweep import _design_map, sweep
+    from hertz_chain.simulation import simulate_batch
+    from hertz_chain.sweeps import _design_map, sweep
 
     tmp = Path(tempfile.mkdtemp())
     path = tmp / "sweep.toml"

@@ -7,8 +7,6 @@ architecture and conventions.
 
 
 import importlib as _importlib
-import sys as _sys
-import types as _types
 from typing import TYPE_CHECKING as _TYPE_CHECKING
 
 # Public name -> the submodule that defines it. Resolved on first use (PEP 562), so that
@@ -30,8 +28,8 @@ _EXPORTS = {
     "ShockCondition": "standards",
     "check": "standards",
     "find_condition": "standards",
-    "Built": "build",
-    "build": "build",
+    "Built": "builder",
+    "build": "builder",
     "CHI_MAPS": "calibration",
     "chi_from_restitution": "calibration",
     "chi_map_table": "calibration",
@@ -64,10 +62,10 @@ _EXPORTS = {
     "material": "materials",
     "material_names": "materials",
     "G0": "constants",
-    "OptimizeResult": "optimize",
-    "optimize": "optimize",
-    "FitResult": "fit",
-    "fit": "fit",
+    "OptimizeResult": "optimization",
+    "optimize": "optimization",
+    "FitResult": "fitting",
+    "fit": "fitting",
     "PulseMetrics": "pulse",
     "pulse_metrics": "pulse",
     "DesignComparison": "rigid",
@@ -89,21 +87,21 @@ _EXPORTS = {
     "velocity_gains": "rigid",
     "RigidResult": "rigid_events",
     "simulate_rigid": "rigid_events",
-    "BatchSolution": "simulate",
-    "Restitution": "simulate",
-    "Solution": "simulate",
-    "Tolerances": "simulate",
-    "Trajectory": "simulate",
-    "UnrolledTsit5": "simulate",
-    "launch_velocity": "simulate",
-    "restitution": "simulate",
-    "simulate_impact": "simulate",
-    "prepare_launch": "simulate",
-    "simulate": "simulate",
-    "simulate_batch": "simulate",
-    "ShockResponseSpectrum": "srs",
-    "octave_frequencies": "srs",
-    "srs": "srs",
+    "BatchSolution": "simulation",
+    "Restitution": "simulation",
+    "Solution": "simulation",
+    "Tolerances": "simulation",
+    "Trajectory": "simulation",
+    "UnrolledTsit5": "simulation",
+    "launch_velocity": "simulation",
+    "restitution": "simulation",
+    "simulate_impact": "simulation",
+    "prepare_launch": "simulation",
+    "simulate": "simulation",
+    "simulate_batch": "simulation",
+    "ShockResponseSpectrum": "spectrum",
+    "octave_frequencies": "spectrum",
+    "srs": "spectrum",
     "STANDARD_GRAVITY": "constants",
     "Status": "status",
     "Stack": "stack",
@@ -114,8 +112,8 @@ _EXPORTS = {
     "precompressed": "stack",
     "stack_designs": "stack",
     "simulate_file": "workflow",
-    "SweepResult": "sweep",
-    "sweep": "sweep",
+    "SweepResult": "sweeps",
+    "sweep": "sweeps",
     "StackSpec": "stackfile",
     "load_stack_file": "stackfile",
     "parse_stack": "stackfile",
@@ -138,23 +136,9 @@ def __dir__():
     return sorted(set(globals()) | set(_EXPORTS))
 
 
-class _Package(_types.ModuleType):
-    """Keeps the functions `simulate`, `srs`, `build`, `optimize`, `fit` and `sweep` from being shadowed by their submodules of
-    the same name when the import system binds a loaded submodule onto the package (as the eager
-    `from .simulate import simulate` of a classic `__init__` would)."""
-
-    def __setattr__(self, name, value):
-        if isinstance(value, _types.ModuleType) and _EXPORTS.get(name) == name:
-            value = getattr(value, name)
-        super().__setattr__(name, value)
-
-
-_sys.modules[__name__].__class__ = _Package
-
-
 if _TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
     from .analysis import Report, RigidComparison, accelerometer, analyse, independence
-    from .build import Built, build
+    from .builder import Built, build
     from .calibration import (
         CHI_MAPS,
         chi_from_restitution,
@@ -184,8 +168,8 @@ if _TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
     from .errors import HertzChainError, ParameterError, SolverError, StackFileError
     from .materials import Material, contact_stiffness, effective_mass, material, material_names
     from .constants import G0, STANDARD_GRAVITY
-    from .optimize import OptimizeResult, optimize
-    from .fit import FitResult, fit
+    from .optimization import OptimizeResult, optimize
+    from .fitting import FitResult, fit
     from .pulse import PulseMetrics, pulse_metrics
     from .rigid import (
         DesignComparison,
@@ -207,7 +191,7 @@ if _TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
         velocity_gains,
     )
     from .rigid_events import RigidResult, simulate_rigid
-    from .simulate import (
+    from .simulation import (
         BatchSolution,
         Restitution,
         Solution,
@@ -221,11 +205,11 @@ if _TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
         simulate,
         simulate_batch,
     )
-    from .srs import ShockResponseSpectrum, octave_frequencies, srs
+    from .spectrum import ShockResponseSpectrum, octave_frequencies, srs
     from .standards import CheckResult, ShockCondition, check, find_condition
     from .status import Status
     from .stack import Stack, State, at_impact, dropped, resting, stack_designs
     from .stackfile import StackSpec, load_stack_file, parse_stack
-    from .sweep import SweepResult, sweep
+    from .sweeps import SweepResult, sweep
     from .workflow import simulate_file
 

@@ -1,5 +1,5 @@
 """Reverse mode by replaying the accepted steps: `_replayed_solve`, a discrete adjoint over the saved
-accepted states (`hertz_chain.simulate` module docstring, "Gradients")."""
+accepted states (`hertz_chain.simulation` module docstring, "Gradients")."""
 
 from __future__ import annotations
 
@@ -9,25 +9,25 @@ import jax
 import jax.numpy as jnp
 
 from . import _config  # noqa: F401  (float64)
-from ._solve import _core, _diffeqsolve, _scaled_field
-from ._solver import _Config
+from ._solve import _solve_record, _diffeqsolve, _scaled_field
+from ._solver import _SolveConfig
 from ._tracking import T_IN, T_OUT
 
 # ==================================================================== reverse mode: replay the accepted steps
 @eqx.filter_custom_vjp
-def _replayed_solve(diff, t1s, scale, T, cfg: _Config) -> dict:
-    """`_core` of the solve from `diff = (stack, y0s)`, differentiable in reverse mode by a discrete
+def _replayed_solve(diff, t1s, scale, T, cfg: _SolveConfig) -> dict:
+    """`_solve_record` of the solve from `diff = (stack, y0s)`, differentiable in reverse mode by a discrete
     adjoint over the accepted steps (`_replay_bwd`). Undifferentiated, it is the lean solve."""
     stack, y0s = diff
-    return _core(_diffeqsolve(stack, y0s, t1s, scale, T, None, cfg, history=False, audit=False))
+    return _solve_record(_diffeqsolve(stack, y0s, t1s, scale, T, None, cfg, history=False, audit=False))
 
 
 @_replayed_solve.def_fwd
-def _replay_fwd(perturbed, diff, t1s, scale, T, cfg: _Config):
+def _replay_fwd(perturbed, diff, t1s, scale, T, cfg: _SolveConfig):
     del perturbed
     stack, y0s = diff
     sol = _diffeqsolve(stack, y0s, t1s, scale, T, None, cfg, history=True, audit=False)
-    core = _core(sol)
+    core = _solve_record(sol)
     # per interface: the history index of the point recorded in `_Contacts.rows` (the first accepted
     # point after its last contact), found by its time (the same float), and whether there is one
     c = core["contacts"]
@@ -37,7 +37,7 @@ def _replay_fwd(perturbed, diff, t1s, scale, T, cfg: _Config):
 
 
 @_replayed_solve.def_bwd
-def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _Config):
+def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _SolveConfig):
     """Reverse sweep over the accepted steps `y_k = Phi(y_{k-1}; t_{k-1}, t_k, stack)`: with the step
     times frozen (as diffrax's controller does in reverse mode: it stops gradients through the step size),
     `lambda_{k-1} = (dPhi/dy)^T lambda_k + (cotangent of y_{k-1})` and `stack_bar += (dPhi/dstack)^T
@@ -56,7 +56,7 @@ def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _Config):
     rows_ct = g["contacts"].rows
     if rows_ct is not None:  # overlap, rate and velocities at the recorded point: linear in that state
         def at_rows(Y):
-            x, v, _ = stack.split(Y[:, :n3] * scale)
+            x, v, _ = stack.split(Y[:, :n3] * scale[None, :])
             v_lo = jnp.concatenate([jnp.zeros(1, v.dtype), jnp.diagonal(v, offset=-1)])
             return (jnp.diagonal(stack.overlaps(x)), jnp.diagonal(stack.overlap_rates(v)), v_lo,
                     jnp.diagonal(v))

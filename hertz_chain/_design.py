@@ -29,7 +29,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import _config  # noqa: F401  (float64)
-from .build import _stiffness, build
+from .builder import _stiffness, build
 from .contact import _LAW_CLASSES
 from .errors import StackFileError
 from .keys import Slot

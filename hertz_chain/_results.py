@@ -1,4 +1,4 @@
-"""The results of `hertz_chain.simulate`: `Trajectory`, `Solution`, `BatchSolution`."""
+"""The results of `hertz_chain.simulation`: `Trajectory`, `Solution`, `BatchSolution`."""
 
 from __future__ import annotations
 

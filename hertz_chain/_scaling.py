@@ -1,5 +1,5 @@
 """The units of a solve (`Scales`: time, length, velocity, energy) and the default time limit, from
-the physics of the stack (`hertz_chain.simulate` module docstring, "Scaling")."""
+the physics of the stack (`hertz_chain.simulation` module docstring, "Scaling")."""
 
 from __future__ import annotations
 

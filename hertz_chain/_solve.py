@@ -1,4 +1,4 @@
-"""The compiled solve behind `hertz_chain.simulate`: the scaled vector field, the one call to
+"""The compiled solve behind `hertz_chain.simulation`: the scaled vector field, the one call to
 `diffrax.diffeqsolve`, its outputs, the step history's post-processing, and the batched and sharded
 solves."""
 
@@ -16,7 +16,7 @@ import numpy as np
 from . import _config  # noqa: F401  (float64)
 from ._export import cached_jit
 from ._scaling import Scales, _default_t_max, _scales
-from ._solver import _Config
+from ._solver import _SolveConfig
 from ._tracking import (
     PEAK_FORCE,
     T_FIRST_IN,
@@ -58,7 +58,10 @@ def _scaled_field(t, ys, args):
 
 
 def _derived(stack: Stack, y):
-    """Physical quantities of SI states `(..., 3n)`."""
+    """Physical quantities of SI states `(..., 3n)` (a stack of states row by row: the laws see one
+    state's `(n,)` interfaces at a time, with no implicit broadcasting)."""
+    if y.ndim > 1:
+        return jax.vmap(lambda row: _derived(stack, row))(y)
     x, v, diss = stack.split(y)
     q = stack.memory(y)
     d, dd = stack.overlaps(x), stack.overlap_rates(v)
@@ -72,7 +75,7 @@ def _derived(stack: Stack, y):
     return out
 
 
-def _setup(stack: Stack, state: State, t_max, cfg: _Config):
+def _setup(stack: Stack, state: State, t_max, cfg: _SolveConfig):
     """Scales, the scaled initial state and the scaled end time of a solve."""
     n = stack.n
     sc = _scales(stack, state)
@@ -84,7 +87,7 @@ def _setup(stack: Stack, state: State, t_max, cfg: _Config):
     return sc, scale, y0s, t1 / sc.time
 
 
-def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _Config, history: bool, audit: bool):
+def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _SolveConfig, history: bool, audit: bool):
     """The one call to `diffrax.diffeqsolve` (scaled state and time). Saves, in `sol.ys`/`sol.ts` in
     this order: the accepted steps with `t0` (if `history`), the times `ts_s` (if given), `t1`."""
     subs = []
@@ -110,13 +113,13 @@ def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _Config, history: 
     )
 
 
-def _core(sol) -> dict:
+def _solve_record(sol) -> dict:
     """What every solve reports: final scaled time and state, the contacts' bookkeeping, status, steps.
 
     The status (`hertz_chain.status.Status`): the event (the cascade is over) or, with `until="t_max"`,
     an accepted point where it was over: complete (with rebounds if a contact closed after it); else
     `t_max` or `max_steps` first: incomplete, or no contact if nothing ever touched; a non-finite state
-    is checked in `_outputs`."""
+    is checked in `_launch_outputs`."""
     c = sol.solver_state[1]
     over, rebounds = c.cascade[0] > 0, c.cascade[1] > 0
     touched = jnp.any(c.rows[:, T_IN] >= 0)
@@ -134,8 +137,8 @@ def _core(sol) -> dict:
                 num_rejected_steps=sol.stats["num_rejected_steps"])
 
 
-def _outputs(stack: Stack, sc: Scales, scale, core: dict, until: str = "cascade") -> dict:
-    """Launch data (in SI) from a solve's `_core` (`_end_of_contacts`, `_launch`). A mass still pushed
+def _launch_outputs(stack: Stack, sc: Scales, scale, core: dict, until: str = "cascade") -> dict:
+    """Launch data (in SI) from a solve's `_solve_record` (`_end_of_contacts`, `_launch`). A mass still pushed
     when the cascade ended (mass 1 resting on the ground) is given its velocity then: the final state
     of a solve stopped by the event (`until="cascade"`; it carries the reverse-mode cotangent), the
     velocities kept in `_Contacts.cascade` otherwise."""
@@ -174,15 +177,15 @@ def _outputs(stack: Stack, sc: Scales, scale, core: dict, until: str = "cascade"
     )
 
 
-def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, launch_only: bool = False):
-    """One solve's outputs (`_outputs`) and, unless `launch_only` (`launch_velocity`'s path: no energy
+def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _SolveConfig, launch_only: bool = False):
+    """One solve's outputs (`_launch_outputs`) and, unless `launch_only` (`launch_velocity`'s path: no energy
     audit, no step history, no grid), the scales, the step history or the audit's results, and the grid."""
     n3 = stack.state_size
     sc, scale, y0s, t1s = _setup(stack, state, t_max, cfg)
     sol = _diffeqsolve(stack, y0s, t1s, scale, sc.time, None if ts is None else ts / sc.time, cfg,
                        history=cfg.save_steps, audit=not launch_only and not cfg.save_steps)
     contacts = sol.solver_state[1]
-    out = _outputs(stack, sc, scale, _core(sol), cfg.until)
+    out = _launch_outputs(stack, sc, scale, _solve_record(sol), cfg.until)
     if launch_only:
         return out
     out["scales"] = sc
@@ -200,13 +203,13 @@ def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _Config, launch_only
         # the first contact of every interface, [first point in it, first point after it] (s; step-resolved)
         out["first_contacts"] = jnp.stack([pk[T_FIRST_IN], pk[T_FIRST_OUT]], axis=-1) * sc.time
     if ts is not None:
-        grid = _derived(stack, sol.ys[int(cfg.save_steps)][:, :n3] * scale)
+        grid = _derived(stack, sol.ys[int(cfg.save_steps)][:, :n3] * scale[None, :])
         grid["t"] = ts
         out["grid"] = grid
     return out
 
 
-def _solve_plain(stack: Stack, state: State, ts, t_max, cfg: _Config) -> dict:
+def _solve_plain(stack: Stack, state: State, ts, t_max, cfg: _SolveConfig) -> dict:
     """`_solve_impl` with `Scales` as a dict: only dicts, tuples and arrays, which `jax.export` can keep."""
     out = dict(_solve_impl(stack, state, ts, t_max, cfg))
     out["scales"] = {f.name: getattr(out["scales"], f.name) for f in dataclasses.fields(Scales)}
@@ -221,7 +224,7 @@ def _history_impl(stack: Stack, history, sc: Scales, rows: int):
     """Physical quantities and the energy audit of the first `rows` points of a saved step history
     (scaled; points after the solve's end are inf)."""
     ys, ts = history
-    steps = _derived(stack, ys[:rows] * sc.vector(stack.n, stack.has_memory))
+    steps = _derived(stack, ys[:rows] * sc.vector(stack.n, stack.has_memory)[None, :])
     steps["t"] = ts[:rows] * sc.time
     err = jnp.where(jnp.isfinite(steps["t"]), jnp.abs(steps["energy"] - steps["energy"][0]), 0.0)
     return steps, jnp.max(err) / sc.energy

@@ -1,4 +1,4 @@
-"""Options and solvers of `hertz_chain.simulate`: `Tolerances`, the unrolled Tsit5, `make_solver` (from
+"""Options and solvers of `hertz_chain.simulation`: `Tolerances`, the unrolled Tsit5, `make_solver` (from
 `hertz_chain.registry.SOLVERS`), the adjoint choice and the static configuration of a solve."""
 
 from __future__ import annotations
@@ -13,11 +13,9 @@ import numpy as np
 
 from . import _config  # noqa: F401  (float64)
 from . import registry as _registry
+from .constants import UNTIL  # noqa: F401  (re-exported by simulate)
 from .errors import ParameterError
 
-#: What `simulate(..., until=...)` accepts: stop at the end of the first cascade, go on to `t_max`, or
-#: stop as soon as the top mass's launch is final (`_tracking._top_final`).
-UNTIL = ("cascade", "t_max", "launch")
 
 
 # ==================================================================== options
@@ -133,7 +131,7 @@ def _make_adjoint(adjoint, max_steps: int) -> dfx.AbstractAdjoint:
     raise ParameterError("adjoint", adjoint, "'reverse' (jax.grad), 'forward' (jax.jacfwd) or a diffrax adjoint")
 
 
-class _Config(eqx.Module):
+class _SolveConfig(eqx.Module):
     """Everything static about a solve: one compilation per (structure, config)."""
 
     solver: Any

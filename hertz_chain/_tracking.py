@@ -1,6 +1,6 @@
 """Contact tracking inside the solver loop: the end of the first cascade (`_cascade_over`), the
 per-interface bookkeeping of the accepted steps (`_Contacts`, carried by the `_Tracked` wrapper), and
-the launch velocities located from it (`_end_of_contacts`, `_launch`). See the `hertz_chain.simulate`
+the launch velocities located from it (`_end_of_contacts`, `_launch`). See the `hertz_chain.simulation`
 module docstring, "Stopping" and "Launch velocities"."""
 
 from __future__ import annotations
@@ -151,7 +151,7 @@ class _Contacts(eqx.Module):
     until then), then the scaled times of the first accepted points in and after that first contact
     (`peaks (7, n)`; NaN until then): in free flight the velocity differences are the approach and separation speeds, which
     gravity does not change between two falling bodies; for the per-design results of a batched solve
-    without a step history (`hertz_chain.sweep`). Packed into few arrays: each
+    without a step history (`hertz_chain.sweeps`). Packed into few arrays: each
     array is a separate operation in every step of the loop.
     """
 

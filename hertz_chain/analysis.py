@@ -6,7 +6,7 @@
   `e_eff = -(V2 - V1)/(v2 - v1)` (paper Eq 2; `hertz_chain.episodes`);
 - the **acceleration pulse** of every mass (`hertz_chain.pulse`), as an accelerometer fixed to the mass
   reads it: the contact acceleration `a + g` (zero in free fall), in m/s² and g;
-- the **shock response spectrum** of the top mass's pulse (`hertz_chain.srs`: maximax absolute
+- the **shock response spectrum** of the top mass's pulse (`hertz_chain.spectrum`: maximax absolute
   acceleration, Q = 10, 1/12 octave, Smallwood ramp-invariant filter, ISO 18431-4): of the top mass's
   own contact (the interface below it), over a band that covers at least 100 Hz-10 kHz and
   `[0.1/D, 20/D]` (D the pulse's 10 % duration), on the dense solution where the steps are coarse;
@@ -37,7 +37,7 @@ from .errors import HertzChainError, ParameterError, SolverError
 from .pulse import G0, PulseMetrics, pulse_metrics
 from .rigid import chain_gain, stack_gain
 from .rigid_events import simulate_rigid
-from .srs import (DEFAULT_PPC, ShockResponseSpectrum, SRSOptions, _active_sample_rate, octave_frequencies,
+from .spectrum import (DEFAULT_PPC, ShockResponseSpectrum, SRSOptions, _active_sample_rate, octave_frequencies,
                   resample_uniform, srs)
 from .status import Status
 
@@ -282,11 +282,11 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
 
     **Arguments:**
 
-    - `solution`: the result of `hertz_chain.simulate`.
+    - `solution`: the result of `hertz_chain.simulation`.
     - `nominal_restitution`: `(n,)` the restitution each interface was designed for (entry 0 = ground;
       entry 0 ignored without the ground), for the nominal rigid prediction; None skips it.
     - `tolerances`: optional `{"rtol": ..., "atol": ...}` the solve used, for the warnings.
-    - `srs_options`: how the top SRS is computed (`hertz_chain.srs.SRSOptions`; the stack file's
+    - `srs_options`: how the top SRS is computed (`hertz_chain.spectrum.SRSOptions`; the stack file's
       `[srs]`); default maximax absolute acceleration, Q = 10, 1/12 octave, the default band.
     - `yield_limits`: `materials.YieldLimit`s of the interfaces whose materials have a yield strength
       (`Built.yield_limits`): an interface with an elastic or viscous law whose peak Hertz pressure

@@ -33,7 +33,7 @@ for Tsuji), which is positive at the first touch, so it cannot fire at $\tau = 0
 function of one variable: a single `scipy.integrate.solve_ivp` (DOP853, rtol 1e-12, atol 1e-15,
 terminal events) per evaluation, inverted with `scipy.optimize.brentq` and cached with
 `functools.lru_cache` on `(e, clamp)`, so repeated calls are instant. Nothing here is differentiated
-or batched; the diffrax/JAX machinery is reserved for the stack simulator (`hertz_chain.simulate`).
+or batched; the diffrax/JAX machinery is reserved for the stack simulator (`hertz_chain.simulation`).
 The measured self-consistency of $e$ is about 1e-11 (halving rtol changes $e$ by < 1e-11).
 
 ## Closed forms used where they exist

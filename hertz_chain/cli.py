@@ -7,12 +7,12 @@ Commands:
   — simulate a stack file and compare with the rigid model; `--set` overrides a key of the file
   (`--set drop.height="30 cm"`; also for `check` and `compare`).
 - `hertz-chain optimize STACK.toml [--json] [--write OUT.toml] [--plot F.png]` — the best stack under
-  compliant contacts (`hertz_chain.optimize`; exit 0 converged, 3 not converged, 5 failed).
+  compliant contacts (`hertz_chain.optimization`; exit 0 converged, 3 not converged, 5 failed).
 - `hertz-chain sweep STACK.toml --output OUT.zarr [--workers N | --scheduler ADDR] [--resume] [--json]` —
-  a design space into a Zarr store that survives a kill (`hertz_chain.sweep`).
+  a design space into a Zarr store that survives a kill (`hertz_chain.sweeps`).
 - `hertz-chain plot OUT.zarr --x KEY [--y KEY] [--var NAME] --output F.png` — a line or a map from a sweep.
 - `hertz-chain fit STACK.toml MEASURED.csv --vary contact.stiffness[0] [--write F.toml] [--plot F.png]` —
-  contact parameters fitted to a measured pulse by least squares, with standard errors (`hertz_chain.fit`).
+  contact parameters fitted to a measured pulse by least squares, with standard errors (`hertz_chain.fitting`).
 - `hertz-chain check STACK.toml [--standard NAME] [--json] [--plot F.png]` — the top pulse against a
   shock-test condition (`hertz_chain.standards`; exit 1 when a criterion fails); `--standard list`.
 - `hertz-chain compare STACK.toml MEASURED.csv [--cfc N] [--align xcorr|onset|none] [--json] [--plot F.png]`
@@ -323,7 +323,7 @@ def optimize(
 ) -> None:
     """Find the stack that maximises the launch gain, or that gives a target pulse, under compliant contacts."""
     from . import _paths
-    from .optimize import read_optimize_file
+    from .optimization import read_optimize_file
 
     try:
         if write is not None and plot is not None and os.path.abspath(write) == os.path.abspath(plot):
@@ -338,7 +338,7 @@ def optimize(
     except HertzChainError as exc:
         _fail(str(exc))
     from . import report
-    from .optimize import optimize as run_optimize
+    from .optimization import optimize as run_optimize
 
     try:
         with progress(f"optimising {stack_file.name}"):
@@ -372,7 +372,7 @@ def sweep(
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
 ) -> None:
     """Sweep a design space (the file's sweep axes: a grid or samples) into a Zarr store that survives a kill."""
-    from .sweep import check
+    from .sweeps import check
 
     try:
         if workers is not None and scheduler is not None:
@@ -390,7 +390,7 @@ def sweep(
     typer.echo(f"hertz-chain: sweep: {plural(plan.size, 'design')} in {plural(plan.n_chunks, 'chunk')} of "
                f"up to {plan.chunk_rows * plan.row} designs; about {plan.size * per_design / 1e6:.3g} MB uncompressed",
                err=True)
-    from .sweep import sweep as run_sweep
+    from .sweeps import sweep as run_sweep
 
     def estimate(done, todo, seconds):  # once, after the first chunk (the progress bar has an ETA on a terminal)
         if done == 1 and todo > 1 and not sys.stderr.isatty():
@@ -561,7 +561,7 @@ def fit(
 ) -> None:
     """Fit contact stiffness and restitution to a measured pulse by least squares, with standard errors."""
     from . import _paths
-    from .fit import read_fit_file
+    from .fitting import read_fit_file
     from .measured import read_pulse_csv
 
     try:
@@ -579,7 +579,7 @@ def fit(
     except HertzChainError as exc:
         _fail(str(exc))
     from . import report
-    from .fit import fit as run_fit
+    from .fitting import fit as run_fit
 
     try:
         with progress(f"fitting {stack_file.name} to {measured.name}"):

@@ -1,6 +1,6 @@
 """Physical constants shared by every module (SI units; no heavy imports, so the CLI stays fast)."""
 
-__all__ = ["STANDARD_GRAVITY", "G0", "MAX_MASSES", "INDEPENDENT_BELOW"]
+__all__ = ["STANDARD_GRAVITY", "G0", "MAX_MASSES", "INDEPENDENT_BELOW", "UNTIL"]
 
 STANDARD_GRAVITY = 9.80665
 """Standard acceleration of gravity, m/s² (3rd CGPM 1901; ISO 80000-3). The default `drop.gravity`."""
@@ -16,3 +16,7 @@ JAX, so that the stack-file checks and the command line refuse a larger stack be
 INDEPENDENT_BELOW = 0.01
 """Largest overlap fraction of neighbouring contacts still called "independent" (1 %): the regime of a
 report (`analysis`) and of a sweep's designs (`sweep`)."""
+
+UNTIL = ("cascade", "t_max", "launch")
+"""What a run's `until` (`simulate(..., until=...)`, `solver.until`) accepts: stop at the end of the first
+cascade, go on to `t_max` and report rebounds, or stop as soon as the top mass's launch is final."""

@@ -119,7 +119,7 @@ class AbstractContactLaw(eqx.Module):
     def from_dimensionless(cls, k, d, *, effective_mass, calibration_velocity, clamp: bool = True):
         """The law from its stiffness ``k`` and dimensionless damping ``d`` (`dimensionless_damping`):
         JAX-traceable and differentiable in every argument, so that a design's contacts follow its
-        masses (`hertz_chain.optimize`). ``calibration_velocity`` is used by the speed-dependent laws."""
+        masses (`hertz_chain.optimization`). ``calibration_velocity`` is used by the speed-dependent laws."""
         raise NotImplementedError  # pragma: no cover
 
     def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):

@@ -39,7 +39,9 @@ class ContactEpisode:
     last one; its restitution is then NaN, by design, and says so. `peak_force` is the largest sample
     (the value the exported data hold); `peak_force_time` and `peak_force_refined` the time and value of
     the peak of the parabola through it and its neighbours (`parabolic_peak`; never below the largest
-    sample), the better estimate of the true peak between the solver's steps (O(h^2) of the local step;
+    sample; the time is NaN where the largest force is no peak inside the record: a contact closed at
+    the first sample whose force never rose above its first value, as in a held chain the wave has not
+    reached, or a force still rising at the record's last sample), the better estimate of the true peak between the solver's steps (O(h^2) of the local step;
     the sample alone is low by O(h^2) too, with a larger constant;
     docs/references.md, "Peaks between steps").
     """
@@ -157,6 +159,23 @@ def parabolic_peak(t, y, i0, i1) -> tuple[float, float]:
     if not t0 <= tv <= t2:
         return float(t1), float(y1)
     return float(tv), float(y1 + a * (tv - t1) ** 2 + (2 * a * t1 + b) * (tv - t1))
+
+
+#: A contact closed at the first sample has a peak only if its force rises above its first value by more
+#: than this fraction of it (a held chain's static contacts, which no wave has reached, stay at their
+#: preload to round-off and the solver's error, far below it).
+PEAK_RISE = 1e-6
+
+
+def _peak_outside(y, i0, i1, *, closed_at_start: bool) -> bool:
+    """The largest force of the run ``[i0, i1]`` is no peak inside the record: the contact was closed at
+    the first sample and its force never rose above that value by more than `PEAK_RISE` of it (a static
+    contact of a held chain that the wave never reached), or the force is largest at the last sample
+    of a run the record cuts off (still rising there). Its time is then unknown (NaN)."""
+    seg = y[i0 : i1 + 1]
+    if closed_at_start and seg.max() <= y[i0] + PEAK_RISE * abs(y[i0]):
+        return True
+    return i1 == len(y) - 1 and int(np.argmax(seg)) == len(seg) - 1
 
 
 def _free_side_release(ta, ya, da, aa, tb, sep) -> tuple[float, float] | None:
@@ -282,6 +301,9 @@ def contact_episodes(
                     hit = _free_side_crossing(t[k], d[k, j], r[k, j], accelerations[k, j], t[i1])
                 t_end, v_out = hit or _crossing(t[i1], t[k], d[i1, j], d[k, j], r[i1, j], r[k, j])
             run = slice(i0, i1 + 1)
+            peak_t, peak_v = parabolic_peak(t, f[:, j], i0, i1)
+            if _peak_outside(f[:, j], i0, i1, closed_at_start=i0 == 0 and d[0, j] > 0):
+                peak_t = float("nan")
             episodes.append(
                 ContactEpisode(
                     interface=int(j),
@@ -289,8 +311,8 @@ def contact_episodes(
                     end=float(t_end),
                     max_overlap=refined_peak(t, d[:, j], r[:, j], i0, i1)[1],
                     peak_force=float(f[run, j].max()),
-                    peak_force_time=parabolic_peak(t, f[:, j], i0, i1)[0],
-                    peak_force_refined=max(parabolic_peak(t, f[:, j], i0, i1)[1], float(f[run, j].max())),
+                    peak_force_time=peak_t,
+                    peak_force_refined=max(peak_v, float(f[run, j].max())),
                     approach_velocity=float(v_in),
                     separation_velocity=float(-v_out),
                     complete=bool(complete),

@@ -1,6 +1,6 @@
 """The key vocabulary: how a stack-file key and an index name one number of a design.
 
-Stack files, `[[optimize.vary]]` (`hertz_chain.optimize`) and, later, sweep axes and `--set KEY=VALUE`
+Stack files, `[[optimize.vary]]` (`hertz_chain.optimization`) and, later, sweep axes and `--set KEY=VALUE`
 name a parameter the same way: a dotted stack-file key and, for the per-body keys, an index
 
 - `stack.masses`: mass numbers, 1 at the bottom to n at the top;

@@ -6,7 +6,7 @@
 - :func:`compare` puts the stack's top pulse and the measurement side by side: the same channel filter
   on both (a CFC of SAE J211-1 / ISO 6487, `hertz_chain.filters`), one time alignment (cross-correlation,
   the pulse onset, or none), the pulse metrics of both (`hertz_chain.pulse`), the SRS of both on one
-  frequency grid (`hertz_chain.srs`), and the Sprague–Geers magnitude, phase and comprehensive errors.
+  frequency grid (`hertz_chain.spectrum`), and the Sprague–Geers magnitude, phase and comprehensive errors.
 
 **Sprague–Geers errors** (M. A. Sprague and T. L. Geers, "A spectral-element method for modelling
 cavitation in transient fluid–structure interaction", Int. J. Numer. Meth. Eng. 60 (2004) 2467–2499;
@@ -296,7 +296,7 @@ class Comparison:
             return {"peak_g": pm.peak_g, "duration_10_ms": pm.duration_10 * 1e3,
                     "equivalent_half_sine_ms": pm.equivalent_half_sine_duration * 1e3,
                     "rise_time_ms": pm.rise_time * 1e3, "delta_v_mps": pm.delta_v_main}
-        from .srs import SRSOptions
+        from .spectrum import SRSOptions
 
         o = self.srs_options if self.srs_options is not None else SRSOptions()
         mm, cm = metrics(self.measured_metrics), metrics(self.model_metrics)
@@ -320,7 +320,7 @@ class Comparison:
 
 
 def prepare_record(measured: MeasuredPulse, cfc: int | None = None) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """The measured record as :func:`compare` and `hertz_chain.fit` use it, before any filter:
+    """The measured record as :func:`compare` and `hertz_chain.fitting` use it, before any filter:
     `(t, a, notes)` on a uniform grid (a non-uniform record resampled linearly at its mean rate, a
     note naming any gap longer than 5 mean steps), with a negative-going record's sign flipped (a
     note). `cfc` only changes the note's wording (the filter is applied by the caller)."""
@@ -360,7 +360,7 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
     - `cfc`: filter both the measurement and the model by this channel frequency class (60, 180, 600,
       1000; `hertz_chain.filters.cfc_filter`), as a lab's data channel would; None: no filter.
     - `align`: `"xcorr"` (default), `"onset"` or `"none"` (`align_shift`).
-    - `shift`: a time shift (s) to use as it is instead of aligning (`hertz_chain.fit` passes its
+    - `shift`: a time shift (s) to use as it is instead of aligning (`hertz_chain.fitting` passes its
       fitted shift); `alignment` then reads `"given"`.
     - `srs_options`: how both SRS are computed (`srs.SRSOptions`: Q, points per octave, band, peak,
       acceleration or pseudo-velocity; the stack file's `[srs]`); default maximax acceleration, Q = 10,
@@ -383,7 +383,7 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
     """
     from .analysis import accelerometer
     from .filters import cfc_filter
-    from .srs import SRSOptions, octave_frequencies, srs_uniform
+    from .spectrum import SRSOptions, octave_frequencies, srs_uniform
 
     if align not in ALIGNMENTS:
         raise ParameterError("align", align, f"one of {', '.join(ALIGNMENTS)}")

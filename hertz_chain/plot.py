@@ -13,7 +13,8 @@ __all__ = ["report_figure", "plot_report", "plot_optimize", "plot_sweep", "plot_
 
 
 def report_figure(report: Report):
-    """A 2×2 figure: velocities, contact forces, the top mass's pulse (g) and its SRS."""
+    """A 2×2 figure: velocities, contact forces (and the far wall's, where a `[wall]` holds the chain), the
+    top mass's pulse (g) and its SRS."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -31,6 +32,9 @@ def report_figure(report: Report):
     ax = axes[0, 1]
     for j in range(0 if report.ground else 1, n):
         ax.plot(t_ms, st.forces[:, j] / 1e3, label="ground–1" if j == 0 else f"{j}–{j + 1}")
+    if report.solution.stack.wall:  # a chain between two walls: the far wall's force on the top mass
+        wall = np.asarray(report.solution.stack.wall_force(np.asarray(st.positions)))
+        ax.plot(t_ms, wall / 1e3, "k--", label=f"{n}–wall")
     ax.set(xlabel="time (ms)", ylabel="contact force (kN)", title="Contact forces")
     ax.legend(fontsize="small", ncol=2)
     ax = axes[1, 0]
@@ -253,7 +257,7 @@ def _check_srs_panel(bx, result) -> None:
     """The checked record's SRS against the required one and its dB limits (`plot_check`)."""
     import warnings
 
-    from .srs import octave_frequencies, srs
+    from .spectrum import octave_frequencies, srs
 
     spec = result.spec
     f_t, a_t = (np.array(c) for c in zip(*spec.srs))
@@ -273,7 +277,7 @@ def _check_srs_panel(bx, result) -> None:
 
 
 def plot_fit(result, path: str | Path) -> None:
-    """A fit (`hertz_chain.fit.FitResult`): the measured pulse with the file's and the fitted model's
+    """A fit (`hertz_chain.fitting.FitResult`): the measured pulse with the file's and the fitted model's
     (g, ms), and their SRS (log-log), the fitted values with their standard errors in the legend."""
     plt = _pyplot()
     s, f = result.start, result.fitted

@@ -36,7 +36,7 @@ class LawRow:
       `delta^(1/4)` or `sqrt(delta)` factor on the rate, no jump of a linear dashpot), so that reverse
       mode over the solver's accepted steps (`simulate.launch_velocity`) differentiates a gapped stack
       accurately (1e-5 against central differences, `tests/test_optimize.py`); for the other laws it
-      does not (errors of order 1 with gaps), and `hertz_chain.optimize` uses batched central
+      does not (errors of order 1 with gaps), and `hertz_chain.optimization` uses batched central
       differences instead.
     - `speed_dependent`: its restitution changes with the impact speed, so calibrating it to a
       restitution needs a `calibration_velocity`; `needs_effective_mass`: calibrating it (or the law
@@ -173,7 +173,7 @@ def _diffrax(name: str) -> Callable[[Any], Any]:
 
 
 def _unrolled_tsit5(tolerances):
-    from .simulate import UnrolledTsit5
+    from .simulation import UnrolledTsit5
 
     return UnrolledTsit5()
 

@@ -24,7 +24,7 @@ ground–mass 1, interface `j` = mass `j` – mass `j+1` (array indices `j−1`,
 * *Stopping.* The cascade is over — normal return — as soon as the system *separates* after at least
   one impact: every pair has `v_{j+1} − v_j >= 0` and, with a ground, `v_1 >= 0` or mass 1 held on the
   ground (checked after every impact, with the tolerance above) — the same rule as the compliant
-  simulator's (`hertz_chain.simulate`). A stack released at rest above the ground, or thrown upward,
+  simulator's (`hertz_chain.simulation`). A stack released at rest above the ground, or thrown upward,
   is followed until it has landed and separated; where nothing ever meets the run returns at once
   with no collision ("no contact"). Later ballistic returns under gravity (mass 1 falling back to the ground after the
   cascade) are a new drop and are not followed.

@@ -263,8 +263,23 @@ class Stack(eqx.Module):
 
     def _map_laws(self, fn, *args: Array, q: Array | None = None) -> Array:
         """Apply `fn(law, *args_of_its_interfaces, q_of_its_interfaces)` group-wise (`q` is None for a law
-        without memory, or when no `q` is given); zero on missing interfaces."""
+        without memory, or when no `q` is given); zero on missing interfaces. Stacked states `(..., n)` are
+        mapped row by row (`jax.vmap`): a law sees one state's interfaces at a time, never an implicit
+        broadcast of its `(n_group,)` parameters against rows."""
         n = self.n
+        if jnp.ndim(self.masses) > 1:  # a batch of designs (`stack_designs`) called directly: design by design
+            return eqx.filter_vmap(lambda st, qq, *r: st._map_laws(fn, *r, q=qq),
+                                   in_axes=(eqx.if_array(0), None if q is None else 0) + (0,) * len(args))(
+                self, q, *args)
+        if jnp.ndim(args[0]) > 1:
+            lead = jnp.shape(args[0])[:-1]
+            rows = [jnp.reshape(jnp.asarray(a, dtype=float), (-1, n)) for a in args]
+            if q is None:
+                out = jax.vmap(lambda *r: self._map_laws(fn, *r))(*rows)
+            else:
+                q_rows = jnp.reshape(jnp.asarray(q, dtype=float), (-1, n))
+                out = jax.vmap(lambda qq, *r: self._map_laws(fn, *r, q=qq))(q_rows, *rows)
+            return jnp.reshape(out, lead + (n,))
         out = jnp.zeros(jnp.shape(args[0]), dtype=float)
         for idx, law in zip(self.groups, self.laws):
             mem = type(law).has_memory and q is not None

@@ -441,7 +441,7 @@ def srs_criterion(t, a, spec: TestSpec) -> tuple[Criterion, str]:
     margin: the smallest distance to a limit, dB) and a note naming the worst frequency."""
     import warnings
 
-    from .srs import octave_frequencies, srs
+    from .spectrum import octave_frequencies, srs
 
     f_t, a_t = (np.array(c) for c in zip(*spec.srs))
     f = octave_frequencies(f_t[0], f_t[-1] * (1 + 1e-12), 12)

@@ -31,8 +31,8 @@ def run_spec(spec: StackSpec) -> Report:
     """Build, simulate and analyse a stack spec. A dense output grid is added when the file asks
     for one (`solver.n_output` / `solver.dt_output`)."""
     from .analysis import analyse
-    from .build import build
-    from .simulate import simulate
+    from .builder import build
+    from .simulation import simulate
 
     built = build(spec)
     options = dict(built.simulate_options, throw=False)  # the status says how it ended (partial results)
@@ -51,7 +51,7 @@ def run_spec(spec: StackSpec) -> Report:
 
 def srs_options(spec: StackSpec):
     """The `srs.SRSOptions` of a stack file's `[srs]` section."""
-    from .srs import SRSOptions
+    from .spectrum import SRSOptions
 
     o = spec.srs
     return SRSOptions(Q=o.q, per_octave=o.per_octave, band=o.band, peak=o.peak, kind=o.type)

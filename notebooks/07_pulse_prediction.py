@@ -48,7 +48,7 @@ from _nbutil import QUICK, repo_root, show, write_table
 import hertz_chain as hc
 from hertz_chain import calibration, rigid
 from hertz_chain.materials import load_materials
-from hertz_chain.srs import SRSResolutionWarning, octave_frequencies
+from hertz_chain.spectrum import SRSResolutionWarning, octave_frequencies
 
 T0 = time.perf_counter()
 G0 = hc.G0
@@ -123,7 +123,7 @@ def judge(peak_g, d_eq, srs_pulse):
 # Masses 1 kg, 0.4 kg (AISI 52100 balls, radii 5 and 3 cm) and a 0.16 kg AISI 304 body with a flat face,
 # gaps 2 and 1 mm, on an AISI 1045 anvil; viscoelastic contacts calibrated to `e = 0.85` (0.95 at the
 # ground) at the rigid approach speeds. The stiffness of each contact is recomputed here from the
-# formulas above, typed in, and must equal what `hertz_chain.build` made of the file.
+# formulas above, typed in, and must equal what `hertz_chain.builder` made of the file.
 
 # %%
 spec = hc.load_stack_file(EX / "steel_materials.toml")

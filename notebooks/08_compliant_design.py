@@ -39,7 +39,7 @@ import numpy as np
 import tomli_w
 from _nbutil import QUICK, show
 
-from hertz_chain.optimize import optimize
+from hertz_chain.optimization import optimize
 
 TMP = Path(tempfile.mkdtemp())
 M1, MN, N, E = 1.0, 0.1, 4, 0.8

@@ -4,7 +4,7 @@ import copy
 
 import numpy as np
 
-from hertz_chain.simulate import Tolerances
+from hertz_chain.simulation import Tolerances
 from hertz_chain.stack import STANDARD_GRAVITY
 
 G = STANDARD_GRAVITY

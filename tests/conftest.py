@@ -1,4 +1,5 @@
-"""Test configuration: float64 everywhere, as in the library (hertz_chain._config).
+"""Test configuration: float64 everywhere, as in the library (hertz_chain._config), and no implicit rank
+promotion (`jax_numpy_rank_promotion = "raise"`, as diffrax tests itself).
 
 The on-disk caches are on, as for users (`hertz_chain._cache`), but in a fresh folder for this test session
 only: nothing is read from an earlier run or from the user's own cache, and compiles are shared between
@@ -20,6 +21,9 @@ if not os.environ.get("HERTZ_CHAIN_NO_CACHE") and not os.environ.get("HERTZ_CHAI
     atexit.register(shutil.rmtree, _session_cache, ignore_errors=True)
 # two CPU devices on every machine, so that simulate_batch's split over devices is always exercised
 os.environ.setdefault("HERTZ_CHAIN_CPU_DEVICES", "2")
+# diffrax's strict setting: an implicit broadcast of arrays of different ranks is an error, here and in
+# the command-line and notebook subprocesses (which inherit it, and so share the compile cache)
+os.environ.setdefault("JAX_NUMPY_RANK_PROMOTION", "raise")
 
 import jax
 

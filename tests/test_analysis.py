@@ -19,7 +19,7 @@ import hertz_chain as hc
 from hertz_chain.constants import G0
 from hertz_chain.analysis import analyse, independence
 from hertz_chain.episodes import ContactEpisode
-from hertz_chain.simulate import Tolerances, simulate
+from hertz_chain.simulation import Tolerances, simulate
 from hertz_chain.stack import Stack, State, at_impact
 
 E = 0.8
@@ -144,7 +144,7 @@ def test_event_driven_gain_survives_settling_under_gravity():
     gain agrees with the compliant one to 1 % (notebook 05: within 1 % for a gap number Pi > 0.32)."""
     from pathlib import Path
 
-    from hertz_chain.build import build
+    from hertz_chain.builder import build
     from hertz_chain.stackfile import load_stack_file
 
     b = build(load_stack_file(Path(__file__).parents[1] / "examples" / "met10.toml"))
@@ -211,7 +211,7 @@ def test_top_srs_options_pseudo_velocity_against_scipy_and_pyyeti():
     coefficients lose ~1e-5 to cancellation: checked against an ODE solve of the oscillator.)"""
     from pyyeti import srs as pyyeti_srs
 
-    from hertz_chain.srs import SRSOptions, octave_frequencies
+    from hertz_chain.spectrum import SRSOptions, octave_frequencies
 
     opts = SRSOptions(Q=25.0, per_octave=6, band=(200.0, 2e4), peak="pos", kind="pseudo-velocity")
     srs = two_mass_report(srs_options=opts).top_srs

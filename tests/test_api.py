@@ -11,14 +11,16 @@ def test_every_public_name_resolves():
         assert getattr(hc, name) is not None, name
 
 
-def test_functions_are_not_shadowed_by_their_submodules():
-    import hertz_chain.build  # noqa: F401  (binds the submodule onto the package)
-    import hertz_chain.simulate  # noqa: F401
-    import hertz_chain.optimize  # noqa: F401
-    import hertz_chain.srs  # noqa: F401
-    import hertz_chain.sweep  # noqa: F401
-    import hertz_chain.fit  # noqa: F401
+def test_no_module_shares_a_name_with_a_public_name():
+    # a submodule bound onto the package under a public function's name would shadow the function
+    # (issue 17): every module file of the package is named apart from every public name
+    import importlib
+    import pkgutil
 
+    modules = {m.name for m in pkgutil.iter_modules(hc.__path__)}
+    assert not modules & set(hc.__all__), sorted(modules & set(hc.__all__))
+    for m in sorted(modules - {"__main__"}):
+        importlib.import_module(f"hertz_chain.{m}")  # binds every submodule onto the package
     assert callable(hc.simulate) and callable(hc.srs) and callable(hc.build)
     assert callable(hc.optimize) and callable(hc.sweep) and callable(hc.fit)
 
@@ -36,7 +38,7 @@ def test_float64_is_on_once_jax_modules_load():
     assert hc.Hertz(1e9).k.dtype == jnp.float64
 
 
-def _devices_in_subprocess(env: dict, code: str = "import hertz_chain.simulate, jax; print(jax.local_device_count())"):
+def _devices_in_subprocess(env: dict, code: str = "import hertz_chain.simulation, jax; print(jax.local_device_count())"):
     import os
 
     full = {k: v for k, v in os.environ.items() if k not in ("HERTZ_CHAIN_CPU_DEVICES", "XLA_FLAGS")} | env
@@ -50,5 +52,5 @@ def test_cpu_cores_become_devices_unless_the_user_chose():
     assert _devices_in_subprocess({"HERTZ_CHAIN_CPU_DEVICES": "3"}) == 3
     assert _devices_in_subprocess({"HERTZ_CHAIN_CPU_DEVICES": "3",
                                    "XLA_FLAGS": "--xla_force_host_platform_device_count=5"}) == 5
-    started = "import jax; jax.devices(); import hertz_chain.simulate; print(jax.local_device_count())"
+    started = "import jax; jax.devices(); import hertz_chain.simulation; print(jax.local_device_count())"
     assert _devices_in_subprocess({"HERTZ_CHAIN_CPU_DEVICES": "3"}, started) == 1

@@ -10,7 +10,7 @@ from _helpers import mvg as _mvg
 from hertz_chain.analysis import analyse
 from hertz_chain.contact import HuntCrossley
 from hertz_chain.errors import ParameterError, SolverError
-from hertz_chain.simulate import simulate, simulate_batch
+from hertz_chain.simulation import simulate, simulate_batch
 from hertz_chain.stack import Stack, at_impact, stack_designs
 from hertz_chain.status import Status
 

@@ -1,4 +1,4 @@
-"""Stack files resolved into simulator inputs (hertz_chain.build).
+"""Stack files resolved into simulator inputs (hertz_chain.builder).
 
 References: paper Eq 15 (MVG masses m_i = m_1 R^{(i-1)/(n-1)}); Section 4 (after the ground impact,
 mass 1 meets the still-falling mass 2 at (1 + e_{1,0}) v_ff); Hertz stiffness k = (4/3) E* sqrt(R*)
@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 from hertz_chain.status import Status
-from hertz_chain.build import build
+from hertz_chain.builder import build
 from hertz_chain.calibration import chi_from_restitution
 from hertz_chain.errors import StackFileError
-from hertz_chain.simulate import simulate
+from hertz_chain.simulation import simulate
 from hertz_chain.stackfile import load_stack_file, parse_stack
 
 NORMATIVE = """

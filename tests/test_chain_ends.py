@@ -188,6 +188,14 @@ def test_chain_between_two_walls_from_a_stack_file_matches_scipy(tmp_path):
     assert header.endswith(",wall_force_N") and rows.shape[1] == 5
     assert 2 * f0 < rows[:, 4].max() <= report.wall_peak_force * (1 + 1e-12)  # sampled on the 10 us grid
     assert rows[0, 4] == pytest.approx(f0, rel=1e-9)  # at rest the wall carries the end force
+    # the figure's contact-force panel draws it too (kN): F0 at rest, the scipy peak within the step sampling
+    from hertz_chain.plot import report_figure
+
+    fig = report_figure(report)
+    (line,) = [ln for ln in fig.axes[1].get_lines() if ln.get_label() == f"{n}–wall"]
+    y = np.asarray(line.get_ydata())
+    assert y[0] == pytest.approx(f0 / 1e3, rel=1e-9)
+    assert 2 * f0 / 1e3 < y.max() <= report.wall_peak_force / 1e3 * (1 + 1e-12)
 
 
 def test_one_bead_bounces_between_the_ground_and_a_wall_with_hertz_contact_times(tmp_path):

@@ -140,3 +140,20 @@ def test_refined_peak_force_of_one_hertz_impact_against_the_closed_form(tmp_path
     assert ep.peak_force <= ep.peak_force_refined <= F * (1 + 1e-9)
     assert abs(ep.peak_force_refined - F) < abs(ep.peak_force - F)
     assert r.top_pulse.peak_g * 9.80665 * M == pytest.approx(F, rel=1e-7)
+
+
+def test_peak_time_is_nan_where_the_force_never_peaks_inside_the_record():
+    # three columns on one record t in [0, 1]:
+    # 0: a static contact of a held chain (closed from t0, force = its preload to 1e-9): no peak -> NaN
+    # 1: closed from t0 and struck: F = 1 + sin(pi t)^2 peaks at t = 1/2 (closed form) -> a time
+    # 2: a contact still loading at the record's end (F rising to the last sample) -> NaN
+    t = np.linspace(0.0, 1.0, 2001)
+    static = 2.0 * (1 + 1e-9 * np.sin(37 * t))
+    struck = 1.0 + np.sin(np.pi * t) ** 2
+    rising = np.where(t > 0.6, (t - 0.6) ** 2, 0.0)
+    forces = np.stack([static, struck, rising], axis=1)
+    overlaps = np.stack([np.full_like(t, 1e-6), 1e-6 * struck, np.where(t > 0.6, t - 0.6, -(0.6 - t))], axis=1)
+    eps = {ep.interface: ep for ep in contact_episodes(t, overlaps, np.gradient(overlaps, t, axis=0), forces)}
+    assert np.isnan(eps[0].peak_force_time) and eps[0].peak_force == pytest.approx(2.0, rel=1e-8)
+    assert eps[1].peak_force_time == pytest.approx(0.5, abs=1e-9)  # the parabola through the samples
+    assert np.isnan(eps[2].peak_force_time) and eps[2].peak_force == pytest.approx(0.16, rel=1e-12)

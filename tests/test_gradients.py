@@ -7,7 +7,7 @@ import pytest
 from _helpers import G
 
 from hertz_chain.contact import HuntCrossley
-from hertz_chain.simulate import Tolerances, launch_velocity
+from hertz_chain.simulation import Tolerances, launch_velocity
 from hertz_chain.stack import Stack, at_impact
 
 

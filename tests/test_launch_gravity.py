@@ -211,7 +211,7 @@ def _stack(masses, law, g=G) -> hc.Stack:
 def _ends_no_later(sol, ref) -> None:
     """hertz_chain's cascade end against the reference's literal rule: its rule also ends the cascade
     when the lower masses are bound to the ground or, as a group, can never reach the masses above
-    again (`hertz_chain.simulate._cascade_over`), which the literal rule implies, so it ends no later
+    again (`hertz_chain.simulation._cascade_over`), which the literal rule implies, so it ends no later
     (within one solver step: 0.5 contact times, < 2e-4 s here) and after the top mass's launch."""
     assert sol.status.ok, sol.status
     assert sol.launch_times[-1] <= sol.cascade_end_time <= ref.t_end + 2e-4

@@ -1,4 +1,4 @@
-"""Design by the compliant model (`hertz_chain.optimize`, `hertz_chain._design`, `hertz_chain.keys`).
+"""Design by the compliant model (`hertz_chain.optimization`, `hertz_chain._design`, `hertz_chain.keys`).
 
 References: the paper's MVG masses (Eq 15) and gain (Eq 20), written out here; an independent optimum
 computed with scipy alone (its own ODE integration of the touching stack and a bounded 1-D search);
@@ -21,11 +21,11 @@ from scipy.optimize import brentq, minimize_scalar
 
 import hertz_chain as hc
 from hertz_chain._design import DesignMap
-from hertz_chain.build import build
+from hertz_chain.builder import build
 from hertz_chain.cli import main
 from hertz_chain.errors import StackFileError
 from hertz_chain.keys import resolve
-from hertz_chain.optimize import _document, optimize, prepare
+from hertz_chain.optimization import _document, optimize, prepare
 from hertz_chain.registry import LAWS
 from hertz_chain.stackfile import parse_stack
 

@@ -11,7 +11,7 @@ import pytest
 
 import hertz_chain as hc
 from hertz_chain import calibration, contact, registry, stackfile
-from hertz_chain.build import build
+from hertz_chain.builder import build
 from hertz_chain.rigid_events import simulate_rigid
 
 

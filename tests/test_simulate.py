@@ -11,7 +11,7 @@ from scipy.special import beta
 import hertz_chain as hc
 from hertz_chain.contact import Hertz, HuntCrossley, KelvinVoigt, Tsuji
 from hertz_chain.errors import ParameterError
-from hertz_chain.simulate import Tolerances, simulate, simulate_impact
+from hertz_chain.simulation import Tolerances, simulate, simulate_impact
 from hertz_chain.stack import Stack, State, at_impact, resting
 from hertz_chain.status import Status
 

@@ -6,7 +6,7 @@ from _helpers import G
 from _helpers import mvg as _mvg
 
 from hertz_chain.contact import Hertz
-from hertz_chain.simulate import Tolerances, simulate
+from hertz_chain.simulation import Tolerances, simulate
 from hertz_chain.stack import Stack, at_impact
 
 
@@ -26,7 +26,7 @@ def test_unrolled_tsit5_equals_diffrax_tsit5():
     # agrees to rounding in the solution, the error estimate and the dense output; a fixed-step solve too.
     import diffrax as dfx
 
-    from hertz_chain.simulate import UnrolledTsit5
+    from hertz_chain.simulation import UnrolledTsit5
 
     term = dfx.ODETerm(lambda t, y, a: jnp.stack([y[1], -jnp.sin(y[0]) - a * y[1] * jnp.abs(y[1]) + jnp.cos(3 * t)]))
     y0, args, t0, t1 = jnp.array([0.3, -1.2]), 0.7, 0.1, 0.35

@@ -1,4 +1,4 @@
-"""Tests of hertz_chain.srs: the maximax absolute-acceleration shock response spectrum.
+"""Tests of hertz_chain.spectrum: the maximax absolute-acceleration shock response spectrum.
 
 Independent references:
 
@@ -24,7 +24,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
 from hertz_chain.errors import ParameterError
-from hertz_chain.srs import (
+from hertz_chain.spectrum import (
     ShockResponseSpectrum,
     SRSResolutionWarning,
     default_frequency_range,
@@ -438,7 +438,7 @@ def test_options_against_pyyeti(kind, stype, peak, q):
 
 
 def test_srs_options_refuse_bad_values():
-    from hertz_chain.srs import SRSOptions
+    from hertz_chain.spectrum import SRSOptions
 
     for kw, key in (({"Q": 0.4}, "Q"), ({"per_octave": 0}, "per_octave"), ({"band": (10, 5)}, "band"),
                     ({"peak": "max"}, "peak"), ({"kind": "velocity"}, "kind")):

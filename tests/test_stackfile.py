@@ -673,12 +673,12 @@ def test_every_key_the_parser_accepts_is_in_the_manual():
     # tables of allowed keys) appears there as a dotted key or a `key` entry
     from pathlib import Path
 
-    from hertz_chain import stackfile as sf
+    from hertz_chain import _stackspec as sf
 
     manual = (Path(__file__).resolve().parents[1] / "docs" / "stack-files.md").read_text()
     sections = {"drop": sf._DROP_KEYS, "stack": sf._STACK_KEYS, "stack.design": sf._DESIGN_KEYS,
                 "ground": sf._GROUND_KEYS, "contact": sf._CONTACT_KEYS, "solver": sf._SOLVER_KEYS,
-                "materials": sf._MATERIAL_KEYS, "": sf._TOP_KEYS}
+                "materials": sf._MATERIAL_KEYS, "wall": sf._WALL_KEYS, "srs": sf._SRS_KEYS, "": sf._TOP_KEYS}
     missing = [f"{sec}.{key}" if sec else key for sec, keys in sections.items() for key in keys
                if not any(form in manual for form in (f"`{sec}.{key}`", f"`{key}`", f"[{key}]", f"[{sec}.{key}]",
                                                       f"[[{key}]]", f"[{key}.NAME]"))]

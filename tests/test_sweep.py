@@ -1,4 +1,4 @@
-"""Sweeps (`hertz_chain.sweep`, `hertz-chain sweep`): every design against the ordinary path (the stack
+"""Sweeps (`hertz_chain.sweeps`, `hertz-chain sweep`): every design against the ordinary path (the stack
 file with the axis values written in, `build` and `simulate` one by one); paper Eq 19 for the rigid gain;
 scipy's own Sobol sampler for sampled designs; a sweep killed with SIGKILL (mid-write and between the
 results and their marker) and run again equals an uninterrupted one; Dask gives the same numbers."""
@@ -17,7 +17,7 @@ from scipy.stats import qmc
 
 import hertz_chain as hc
 from hertz_chain.cli import main
-from hertz_chain.sweep import sweep
+from hertz_chain.sweeps import sweep
 
 BASE = {"drop": {"impact_velocity": "1 m/s"}, "stack": {"masses": [1.0, 0.3, 0.1], "gaps": "1 mm"},
         "contact": {"law": "tsuji", "stiffness": "1e9 N/m^1.5", "restitution": 0.8},

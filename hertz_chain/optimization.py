@@ -308,7 +308,7 @@ class _Space:
 
 
 def _start_masses(spec: StackSpec, n: int) -> np.ndarray:
-    from .build import design_masses
+    from .builder import design_masses
 
     m = design_masses(spec)
     if n == m.size:
@@ -383,7 +383,7 @@ class _Evaluator:
         self.gradient = ("reverse mode" if all(LAWS[cs.law].smooth_onset for cs in space.dm.contacts.values())
                          else "batched central differences")
         if not problem.needs_pulse and self.gradient == "reverse mode":
-            from .simulate import launch_velocity
+            from .simulation import launch_velocity
 
             def neg_gain(u):
                 x = space.to_x(u)
@@ -407,7 +407,7 @@ class _Evaluator:
         import jax
         import jax.numpy as jnp
 
-        from .simulate import Tolerances, simulate_batch
+        from .simulation import Tolerances, simulate_batch
 
         d, h = len(u), self.FD_STEP
         c = np.clip(u, h, 1.0 - h)
@@ -446,7 +446,7 @@ class _Evaluator:
     def metrics(self, u) -> dict:
         """The exact metrics of the design at `u` from one solve with its step history."""
         from .pulse import pulse_metrics
-        from .simulate import simulate
+        from .simulation import simulate
 
         self.count += 1
         x = np.asarray(self.space.to_x(np.asarray(u, dtype=float)))
@@ -485,7 +485,7 @@ class _Evaluator:
         """`20 log10(SRS / target)` of the top pulse at `srs_frequencies` (maximax, Q = `srs_q`)."""
         import warnings
 
-        from .srs import srs
+        from .spectrum import srs
 
         f, target = self.srs_frequencies()
         with warnings.catch_warnings():
@@ -524,7 +524,7 @@ def _screen(space: _Space, ev: _Evaluator, problem: OptimizeSpec) -> np.ndarray:
     if problem.needs_pulse:  # the exact path: one solve per point, as the search itself
         vals = np.array([ev.pulse_objective(u) for u in U])
     else:
-        from .simulate import simulate_batch
+        from .simulation import simulate_batch
 
         X = jax.vmap(space.to_x)(U)
         stacks, states = jax.vmap(space.dm)(X)
@@ -747,7 +747,7 @@ def _rigid_designs(space: _Space, best_masses: np.ndarray) -> dict:
 def prepare(path: str | Path):
     """Every check of an optimisation file before any solve: `(spec, problem, spaces)`, one search
     space per number of masses. Raises `StackFileError` (one line)."""
-    from .build import design_masses
+    from .builder import design_masses
 
     spec, problem, doc = read_optimize_file(path)
     ns = problem.n or (len(design_masses(spec)),)

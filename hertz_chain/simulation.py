@@ -88,7 +88,7 @@ from ._adjoint import _replayed_solve
 from ._results import BatchSolution, Solution, Trajectory, _to_solution
 from ._scaling import Scales, _scales  # noqa: F401  (`_scales`: the benchmarks use it)
 from ._solve import (  # noqa: F401  (`_scaled_field`: the benchmarks' scipy comparison uses it)
-    _outputs,
+    _launch_outputs,
     _post_history,
     _scaled_field,
     _setup,
@@ -97,7 +97,7 @@ from ._solve import (  # noqa: F401  (`_scaled_field`: the benchmarks' scipy com
     _solve_impl,
     _solve_sharded,
 )
-from ._solver import UNTIL, Tolerances, UnrolledTsit5, _Config, _make_adjoint, make_solver
+from ._solver import UNTIL, Tolerances, UnrolledTsit5, _SolveConfig, _make_adjoint, make_solver
 from .contact import AbstractContactLaw
 from .errors import ParameterError, SolverError
 from .stack import Stack, State, at_impact
@@ -159,7 +159,7 @@ def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, sa
         ts = jnp.asarray(ts_np)
     tolerances = eqx.tree_at(lambda t: (t.rtol, t.atol), tolerances,
                              (np.asarray(float(tolerances.rtol)), np.asarray(float(tolerances.atol))))
-    cfg = _Config(make_solver(solver, tolerances), tolerances, int(max_steps),
+    cfg = _SolveConfig(make_solver(solver, tolerances), tolerances, int(max_steps),
                   _make_adjoint(adjoint, int(max_steps)), save_steps, until)
     return ts, t_max, cfg
 
@@ -295,7 +295,7 @@ def _launch_impl(stack, state, t_max, cfg, replay: bool):
     if replay:
         sc, scale, y0s, t1s = _setup(stack, state, t_max, cfg)
         frozen = jax.lax.stop_gradient((t1s, scale, sc.time))  # the end time and the scales carry no gradient
-        out = _outputs(stack, sc, scale, _replayed_solve((stack, y0s), *frozen, cfg))
+        out = _launch_outputs(stack, sc, scale, _replayed_solve((stack, y0s), *frozen, cfg))
     else:
         out = _solve_impl(stack, state, None, t_max, cfg, launch_only=True)
     v = eqx.error_if(
@@ -332,7 +332,7 @@ def launch_velocity(
     viscoelastic): their `delta^(1/4)`, `sqrt(delta)` or jumping dashpot term has an unbounded derivative
     where a contact closes, and reverse mode over the accepted steps differentiates that poorly: measured
     against central differences, 1e-4 to 2e-3 relative for a touching stack and up to order 1 with gaps
-    (`benchmarks/optimize.md`). For those, difference the values (as `hertz_chain.optimize` does, in one
+    (`benchmarks/optimize.md`). For those, difference the values (as `hertz_chain.optimization` does, in one
     batched solve); Hertz and Hunt–Crossley gradients match central differences to 1e-5.
 
     `adjoint`: `"reverse"` (default; `jax.grad` by replaying the accepted steps, module docstring;

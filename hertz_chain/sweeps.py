@@ -340,7 +340,7 @@ def _design_map(text: str, source: str | None):
     import jax
 
     from ._design import DesignMap, with_masses
-    from .build import design_masses
+    from .builder import design_masses
     from .stackfile import parse_stack
 
     key = hashlib.sha256(text.encode()).hexdigest()
@@ -366,7 +366,7 @@ def _design_map(text: str, source: str | None):
 def _evaluate(text: str, source: str | None, c: int) -> dict:
     """The results of chunk `c` (numpy arrays, one entry per design of the chunk)."""
     from .rigid import stack_gain
-    from .simulate import simulate_batch
+    from .simulation import simulate_batch
 
     plan, dm, widths = _design_map(text, source)
     designs, fields_of = _CACHE[hashlib.sha256(text.encode()).hexdigest() + "jit"]  # compiled once per process

@@ -40,7 +40,7 @@ from .materials import (
 )
 from .registry import LAWS
 from .rigid import cascade_velocities, met_design, met_mass_ratio, mvg_design
-from .simulate import Tolerances
+from .simulation import Tolerances
 from .stack import Stack, State, at_impact, reduced_masses, resting
 from .stackfile import ContactSpec, StackSpec
 
@@ -53,7 +53,7 @@ class Built:
 
     `nominal_restitution` `(n,)`: the restitution each interface was specified for (entry 0 = the
     ground; NaN where a law was given by its raw damping parameter and its restitution is not a
-    constant). `simulate_options`: keyword arguments for `hertz_chain.simulate`.
+    constant). `simulate_options`: keyword arguments for `hertz_chain.simulation`.
     """
 
     stack: Stack

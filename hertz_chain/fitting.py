@@ -265,7 +265,7 @@ class _Model:
 
     def solve(self, x):
         """`(t_steps, v + g t, a + g)` of the top mass for the design `x`; raises on a failed run."""
-        from .simulate import simulate
+        from .simulation import simulate
 
         self.evaluations += 1
         stack, state = self.dm(np.asarray(x, dtype=float))
@@ -298,7 +298,7 @@ class _Model:
 def _tight(tol):
     """Tolerances for the fit's solves: at most 1e-11 (central differences with step 1e-4 need the
     solve's own noise well below 1e-8)."""
-    from .simulate import Tolerances
+    from .simulation import Tolerances
 
     if tol is None:
         return Tolerances(rtol=1e-11, atol=1e-11)
@@ -327,7 +327,7 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
 
     from .filters import CFC_CLASSES, cfc_filter
     from .measured import ALIGNMENTS, compare, prepare_record, read_pulse_csv
-    from .optimize import OptimizeStatus, _set_interface
+    from .optimization import OptimizeStatus, _set_interface
     from .workflow import run_spec, srs_options
 
     t0 = time.perf_counter()
