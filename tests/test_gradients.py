@@ -45,7 +45,7 @@ def test_gradient_matches_finite_differences():
     assert np.max(np.abs(reverse_12 - fd) / scale) <= 1e-5
 
 
-@pytest.mark.parametrize("solver", ["tsit5", "dopri8"])
+@pytest.mark.parametrize("solver", ["tsit5"])  # the replay is the same for any explicit RK tableau (dopri8: `make bench`)
 def test_reverse_replay_equals_diffrax_checkpointed_adjoint(solver):
     # Reference: diffrax's own reverse mode through the solver loop (RecursiveCheckpointAdjoint, which
     # differentiates every accepted step with the step sizes frozen by its controller): the replayed

@@ -27,7 +27,7 @@ STRUCTURES = [
     (2, "hertz", True), (3, "tsuji", True), (5, "hunt-crossley", True), (8, "kelvin-voigt", True),
     (4, "viscoelastic", True), (6, "hertz", False), (3, "tsuji", False),
 ]
-SETTINGS = settings(max_examples=10, deadline=None, derandomize=True,
+SETTINGS = settings(max_examples=6, deadline=None, derandomize=True,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 
 
@@ -89,7 +89,7 @@ def test_random_stacks_close_the_energy_audit_and_report_valid_results(case):
         assert float(np.sum(m * sol.final_velocities)) == pytest.approx(p0, rel=1e-9)
 
 
-@settings(max_examples=8, deadline=None, derandomize=True,
+@settings(max_examples=5, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(stacks())
 def test_measured_restitution_of_every_single_contact_lies_in_zero_one(case):
