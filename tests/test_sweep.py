@@ -115,6 +115,16 @@ def test_dask_local_cluster_gives_the_same_store(tmp_path):
     b = _open(sweep(path, tmp_path / "dask.zarr", workers=2).path)
     for name in a.data_vars:
         np.testing.assert_allclose(a[name].values, b[name].values, rtol=1e-12, err_msg=name)
+    # --scheduler: an existing cluster reached at its real tcp:// address (here one in this process, with
+    # one thread worker, so that it reuses this process's compiled solves)
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                      dashboard_address=None) as cluster:
+        assert cluster.scheduler_address.startswith("tcp://")
+        c = _open(sweep(path, tmp_path / "scheduler.zarr", scheduler=cluster.scheduler_address).path)
+    for name in a.data_vars:
+        np.testing.assert_allclose(a[name].values, c[name].values, rtol=1e-12, err_msg=name)
 
 
 @pytest.mark.parametrize("section, words", [
