@@ -22,6 +22,8 @@ import hertz_chain as hc
 from hertz_chain.simulation import _scaled_field, _scales  # the library's own scaled vector field
 
 DIFFRAX_METHODS = ("tsit5", "tsit5-diffrax", "dopri8", "kvaerno5")
+#: `run.py --quick` (the CI smoke run): the explicit methods only
+QUICK_DIFFRAX_METHODS = ("tsit5", "tsit5-diffrax", "dopri8")
 SCIPY_METHODS = ("DOP853", "Radau", "LSODA")
 MAX_STEP = hc.Tolerances().max_step  # scaled units (contact times), the library default
 

@@ -46,7 +46,7 @@ import hertz_chain as hc  # noqa: E402
 
 import cases  # noqa: E402
 from methods import (  # noqa: E402
-    DIFFRAX_METHODS, SCIPY_METHODS, DiffraxCase, ScipyCase, find_matched, fine_grid, median_time, rel_err,
+    DIFFRAX_METHODS, QUICK_DIFFRAX_METHODS, SCIPY_METHODS, DiffraxCase, ScipyCase, find_matched, fine_grid, median_time, rel_err,
     steps_budget,
 )
 
@@ -96,7 +96,9 @@ def run_case(n: int, regime: str, ladder, grid, quick: bool) -> dict:
     def rungs_of(cache):
         return [cache[q] for q in sorted(cache, reverse=True)]
 
-    for solver in DIFFRAX_METHODS:
+    # quick (CI smoke): no Kvaerno5, whose implicit solver is the longest compile (tests/test_solvers.py and
+    # tests/test_registry.py run it); `make bench` times every method
+    for solver in (QUICK_DIFFRAX_METHODS if quick else DIFFRAX_METHODS):
         get, cache = runner(lambda rtol: dc.solve(solver, rtol))
         for rtol in ladder:
             get(rtol)
@@ -318,9 +320,15 @@ def compile_and_cli(quick: bool) -> dict:
 
 
 # ============================================================================ summaries
+def _present(*tables) -> list[str]:
+    """The diffrax methods (in `DIFFRAX_METHODS` order) that every one of `tables` (dicts keyed by method)
+    has: all four in `make bench`, three in the quick smoke run."""
+    return [m for m in DIFFRAX_METHODS if all(m in t for t in tables)]
+
+
 def _best_diffrax(res):
     best = None
-    for solver in DIFFRAX_METHODS:
+    for solver in _present(res["methods"]):
         m = res["methods"][solver]["matched"]
         if m is not None and (best is None or m["time"] < best[1]["time"]):
             best = (solver, m)
@@ -371,7 +379,7 @@ def recommend(results) -> list[dict]:
     out = []
     for regime in sorted({r["regime"] for r in results}, key=list(cases.REGIMES).index):
         per = {}
-        for solver in DIFFRAX_METHODS:
+        for solver in _present(*(res["methods"] for res in results)):
             tot, rt, ok = 0.0, [], True
             for res in results:
                 if res["regime"] != regime:
@@ -454,15 +462,16 @@ def markdown(data: dict) -> str:
     L.append("")
 
     if data["recommend"]:
+        dfx_cols = [r["others"] for r in data["recommend"]]
         L += ["## Suggested diffrax solver per regime", "",
               "Fastest diffrax method at matched accuracy (launch velocity within 1e-7), summed over n; the matched "
               "rtol = atol per n. Other columns: the same sum for each method "
               "(ms; `inf` = missed 1e-7 for some n).", "",
-              "| regime | best | total ms | rtol needed | " + " | ".join(DIFFRAX_METHODS) + " |",
-              "|---|---|---|---|" + "---|" * len(DIFFRAX_METHODS)]
+              "| regime | best | total ms | rtol needed | " + " | ".join(_present(*dfx_cols)) + " |",
+              "|---|---|---|---|" + "---|" * len(_present(*dfx_cols))]
         for r in data["recommend"]:
             L.append(f"| {r['regime']} | {r['best']} | {r['total_ms']:.1f} | {', '.join(r['rtols'])} | "
-                     + " | ".join(_f(r["others"][s], "{:.1f}", "inf") for s in DIFFRAX_METHODS) + " |")
+                     + " | ".join(_f(r["others"][s], "{:.1f}", "inf") for s in _present(*dfx_cols)) + " |")
         L.append("")
 
     L += ["## Single solves", "",

@@ -1,6 +1,7 @@
 """CI smoke run of the benchmark suite (`benchmarks/run.py --quick`): structure only, no timing assertions.
 
-The quick run integrates one case (n = 2, gapped Tsuji stack) with diffrax Tsit5/Dopri8/Kvaerno5 and scipy
+The quick run integrates one case (n = 2, gapped Tsuji stack) with diffrax Tsit5/Dopri8 (Kvaerno5, the longest
+compile, only in `make bench`; tests/test_solvers.py runs it) and scipy
 DOP853/Radau/LSODA on a three-rung tolerance ladder, one batch size, one gradient (without the comparisons that need another compile: `simulate()` timings,
 diffrax's own reverse mode and central differences, which `make bench` and tests/test_gradients.py do),
 and writes the Markdown
@@ -19,7 +20,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-METHODS = ("tsit5", "tsit5-diffrax", "dopri8", "kvaerno5", "DOP853", "Radau", "LSODA")
+METHODS = ("tsit5", "tsit5-diffrax", "dopri8", "DOP853", "Radau", "LSODA")  # quick: no Kvaerno5 (its compile)
 
 
 @pytest.fixture(scope="module")

@@ -3,7 +3,6 @@
 import jax
 import jax.numpy as jnp
 import numpy as np
-import pytest
 from _helpers import G
 
 from hertz_chain.contact import HuntCrossley
@@ -45,24 +44,12 @@ def test_gradient_matches_finite_differences():
     assert np.max(np.abs(reverse_12 - fd) / scale) <= 1e-5
 
 
-@pytest.mark.parametrize("solver", ["tsit5"])  # the replay is the same for any explicit RK tableau (dopri8: `make bench`)
-def test_reverse_replay_equals_diffrax_checkpointed_adjoint(solver):
-    # Reference: diffrax's own reverse mode through the solver loop (RecursiveCheckpointAdjoint, which
-    # differentiates every accepted step with the step sizes frozen by its controller): the replayed
-    # adjoint is the same discrete derivative, so they agree to rounding (1e-12 of the largest component).
-    # Gravity makes the launch velocity depend on the contacts' recorded points; gaps enter through y0.
-    import diffrax as dfx
-
-    replay = np.asarray(jax.grad(lambda th: _hc_top(th, 1e-10, "reverse", solver))(THETA))
-    diffrax_rev = np.asarray(jax.grad(lambda th: _hc_top(
-        th, 1e-10, dfx.RecursiveCheckpointAdjoint(checkpoints=4096), solver))(THETA))
-    assert np.all(np.isfinite(replay)) and np.max(np.abs(replay)) > 0
-    np.testing.assert_allclose(replay, diffrax_rev, rtol=0, atol=1e-12 * np.max(np.abs(diffrax_rev)))
-
-
 def test_reverse_gradient_batched_equals_diffrax_adjoint_batched():
-    # Reference: diffrax's RecursiveCheckpointAdjoint under the same vmap (vmap must not mix the designs'
-    # step sequences). Against the unbatched gradients both differ by ~2e-5: batched arithmetic rounds
+    # Reference: diffrax's own reverse mode through the solver loop (RecursiveCheckpointAdjoint, which
+    # differentiates every accepted step with the step sizes frozen by its controller), under the same vmap
+    # (vmap must not mix the designs' step sequences): the replayed adjoint is the same discrete derivative,
+    # so they agree to rounding (1e-12 of the largest component). Gravity makes the launch velocity depend
+    # on the contacts' recorded points; gaps enter through y0. Against the unbatched gradients both differ by ~2e-5: batched arithmetic rounds
     # differently, the controller takes other steps, and the discrete derivative moves within its error.
     import diffrax as dfx
 
