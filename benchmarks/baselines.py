@@ -40,6 +40,7 @@ import cases  # noqa: E402
 from methods import MAX_STEP, DiffraxCase, fine_grid, find_matched, median_time, rel_err, steps_budget  # noqa: E402
 
 import hertz_chain as hc  # noqa: E402
+from hertz_chain._scaling import FieldArgs  # noqa: E402
 from hertz_chain.simulation import _scaled_field, _scales  # noqa: E402
 
 MATCH = 1e-7
@@ -282,7 +283,7 @@ class Case:
         """Largest relative difference of the numba field from the library's `_scaled_field`, with and
         without the onset proxies, at random states around the initial one."""
         rng = np.random.default_rng(seed)
-        lib_args = (self.stack, self.scale, self.T)
+        lib_args = FieldArgs(self.stack, self.scale, self.T)
         worst = 0.0
         for _ in range(samples):
             y = self.y0p + rng.normal(0, 1, self.y0p.size)

@@ -19,6 +19,7 @@ from scipy.integrate import solve_ivp
 from scipy.integrate._ivp import radau as _radau, rk as _rk
 
 import hertz_chain as hc
+from hertz_chain._scaling import FieldArgs
 from hertz_chain.simulation import _scaled_field, _scales  # the library's own scaled vector field
 
 DIFFRAX_METHODS = ("tsit5", "tsit5-diffrax", "dopri8", "kvaerno5")
@@ -133,7 +134,7 @@ class ScipyCase:
         self.V = float(sc.velocity)
         self.T = float(sc.time)
         scale = sc.vector(n)
-        args = (stack, scale, sc.time)
+        args = FieldArgs(stack, scale, sc.time)
         self.y0 = np.asarray(state.flat() / scale, dtype=float)
         self.t1 = float(t_end) / self.T
         f = jax.jit(lambda t, y: _scaled_field(t, y, args))

@@ -9,7 +9,8 @@ import jax
 import jax.numpy as jnp
 
 from . import _config  # noqa: F401  (float64)
-from ._solve import _solve_record, _diffeqsolve, _scaled_field
+from ._scaling import FieldArgs
+from ._solve import _diffeqsolve, _scaled_field, _solve_record
 from ._solver import _SolveConfig
 from ._tracking import T_IN, T_OUT
 
@@ -68,7 +69,7 @@ def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _SolveConfig)
     terms, solver = dfx.ODETerm(_scaled_field), cfg.solver
 
     def step(dyn, y, t0, t1):
-        args = (eqx.combine(dyn, static), scale, T)
+        args = FieldArgs(eqx.combine(dyn, static), scale, T)
         return solver.step(terms, t0, t1, y, args, solver.init(terms, t0, t1, y, args), False)[0]
 
     # The onset proxies (`resolve_onsets`, entries state_size:) feed nothing back into the motion and no output

@@ -86,3 +86,15 @@ def _default_t_max(stack: Stack, state: State, sc: Scales) -> Array:
     t_c = jnp.where(stack.interface_mask(), HERTZ_TIME * _peak_overlaps(stack, V) / V, 0.0)
     flight = jnp.where(g > 0, 4.0 * V / g_safe, 0.0)
     return t_fall + 2.0 * jnp.sum(t_gap) + 200.0 * jnp.sum(t_c) + flight
+
+
+class FieldArgs(eqx.Module):
+    """What the scaled vector field (`_solve._scaled_field`) and the contact tracking (`_tracking`) read
+    besides the state: the system, the state's scale vector (`Scales.vector`), the time scale `T` (s), and
+    the scaled initial velocities `v0s` (a contact has happened once a velocity departs from free flight;
+    None where no tracking runs, as in the replayed adjoint's steps)."""
+
+    stack: Stack
+    scale: Array
+    T: Array
+    v0s: Array | None = None

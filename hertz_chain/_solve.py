@@ -15,7 +15,7 @@ import numpy as np
 
 from . import _config  # noqa: F401  (float64)
 from ._export import cached_jit
-from ._scaling import Scales, _default_t_max, _scales
+from ._scaling import FieldArgs, Scales, _default_t_max, _scales
 from ._solver import _SolveConfig
 from ._tracking import (
     PEAK_FORCE,
@@ -42,7 +42,7 @@ def _scaled_field(t, ys, args):
     the cascade-over flag of `_cascade_over` into it after every step, so that the stopping event reads
     one number instead of evaluating the rule again. A state of exactly the physical size
     (`Stack.state_size`: the replayed adjoint's physical part) gets the physical derivatives only."""
-    stack, scale, T = args[:3]
+    stack, scale, T = args.stack, args.scale, args.T
     n3 = scale.shape[0]
     y = ys[:n3] * scale
     dy = T * stack.vector_field(t * T, y) / scale
@@ -103,7 +103,7 @@ def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _SolveConfig, hist
         t1=t1s,
         dt0=cfg.tolerances.first_step,
         y0=y0s,
-        args=(stack, scale, T, y0s[stack.n : 2 * stack.n]),
+        args=FieldArgs(stack, scale, T, y0s[stack.n : 2 * stack.n]),
         saveat=dfx.SaveAt(subs=subs, solver_state=True),
         stepsize_controller=cfg.tolerances.controller(),
         event=dfx.Event(_cascade_complete) if cfg.until != "t_max" else None,

@@ -49,11 +49,11 @@ def _cascade_over(t, ys, args, x, v, d, dd, closed, q=None):
     has its final launch; the masses of a settled or bound group report their velocities at the end of
     the cascade (without gravity within `sqrt(_SETTLED) V` of any later value).
 
-    `args = (stack, scale, T, v0s)`, `v0s` the scaled initial velocities (contact has happened once a
-    velocity departs from free flight); `x`, `v` (SI), the overlaps `d`, their rates `dd` and the closed
+    `args`: the `_scaling.FieldArgs` of the solve (`v0s` the scaled initial velocities: contact has happened
+    once a velocity departs from free flight); `x`, `v` (SI), the overlaps `d`, their rates `dd` and the closed
     contacts `closed` of the state `ys`, which the caller (`_Contacts.update`) has at hand, and the
     memory block `q` of a law with memory (`Stack.memory`)."""
-    stack, scale, T, v0s = args
+    stack, scale, T, v0s = args.stack, args.scale, args.T, args.v0s
     n = stack.n
     mask = stack.interface_mask()
     free_fall = v0s - stack.gravity * T * t / scale[n]
@@ -163,7 +163,7 @@ class _Contacts(eqx.Module):
 
     @staticmethod
     def update(c: _Contacts | None, t, ys, args, audit: bool, launch: bool = False) -> _Contacts:
-        stack, scale = args[:2]
+        stack, scale = args.stack, args.scale
         n = stack.n
         y = ys[: scale.shape[0]] * scale
         x, v, _ = stack.split(y)
