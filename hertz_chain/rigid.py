@@ -55,9 +55,9 @@ __all__ = [
     "mvg_efficiency",
     "mvg_total_mass",
     "mvg_optimal_n",
-    "pb_x0",
-    "pb_n_star",
-    "pb_gain_star",
+    "optimal_pair_ratio",
+    "continuous_optimal_n",
+    "continuous_optimal_gain",
     "mvg_optimal_n_pb",
     # MET (Section 4.2)
     "met_ratios",
@@ -463,12 +463,13 @@ def mvg_optimal_n(R, e, *, n_limit: int = 100_000):
 
 
 def _stationarity(x: float, e: float) -> float:
-    """`h(x) = ln(1+x) − ln(1+e) − x ln x/(1+x)`: zero at the optimal pair ratio (`pb_x0`)."""
+    """`h(x) = ln(1+x) − ln(1+e) − x ln x/(1+x)`: zero at the optimal pair ratio (`optimal_pair_ratio`)."""
     return np.log1p(x) - np.log1p(e) - x * np.log(x) / (1 + x)
 
 
-def pb_x0(e):
-    """Root `x_0 ∈ (0, 1)` of `1 + x_0 = (1 + e)·x_0^{x_0/(1+x_0)}` (paper Eq 23, corrected).
+def optimal_pair_ratio(e):
+    """The optimal ratio of neighbouring masses `x_0 = m_{i+1}/m_i` of a continuous-`n` MVG chain (the
+    Pöschel–Brilliantov route; formerly `pb_x0`): the root `x_0 ∈ (0, 1)` of `1 + x_0 = (1 + e)·x_0^{x_0/(1+x_0)}` (paper Eq 23, corrected).
 
     **Misprint:** the paper prints the exponent as `x_0/1+x_0`; the stationarity condition of Eq 20 in
     continuous `n` (with `x = R^{1/(n−1)}`) is `h(x) = ln(1+x) − ln(1+e) − x ln x/(1+x) = 0`, i.e.
@@ -486,21 +487,21 @@ def pb_x0(e):
     return out if out.ndim else float(out)
 
 
-def pb_n_star(R, e):
-    """Continuous optimal number of masses `n* = ln R/ln x_0 + 1` (paper Eq 22), `x_0` from Eq 23."""
+def continuous_optimal_n(R, e):
+    """(Formerly `pb_n_star`.) Continuous optimal number of masses `n* = ln R/ln x_0 + 1` (paper Eq 22), `x_0` from Eq 23."""
     R = _check_R(R)
-    return np.log(R) / np.log(pb_x0(e)) + 1
+    return np.log(R) / np.log(optimal_pair_ratio(e)) + 1
 
 
-def pb_gain_star(R, e):
-    """Optimal continuous-`n` gain `G* = (1+e)^{n*}/(1 + x_0)^{n*−1} − 1` (paper Eq 24, corrected).
+def continuous_optimal_gain(R, e):
+    """(Formerly `pb_gain_star`.) Optimal continuous-`n` gain `G* = (1+e)^{n*}/(1 + x_0)^{n*−1} − 1` (paper Eq 24, corrected).
 
     **Misprint:** the paper prints `(1 + R)^{n*−1}` in the denominator; `(1 + x_0)` is meant. With
     Eq 22, `R^{1/(n*−1)} = x_0`, so `G*` is Eq 20 evaluated at the continuous `n*`, i.e. the maximum of
     Eq 20 over real `n`.
     """
     R, e = _check_R(R), _check_e_below_one(e)
-    x0 = pb_x0(e)
+    x0 = optimal_pair_ratio(e)
     ns = np.log(R) / np.log(x0) + 1
     return np.exp(ns * np.log1p(e) - (ns - 1) * np.log1p(x0)) - 1
 
@@ -510,7 +511,7 @@ def mvg_optimal_n_pb(R, e):
     `floor(n*)` and `ceil(n*)` (both clipped to `>= 2`) by the gain at integer `n` (Eq 20; ties go to
     the smaller `n`). Agrees with `mvg_optimal_n` because Eq 20 is unimodal in `n`."""
     R, e = np.broadcast_arrays(_check_R(R), _check_e_below_one(e))
-    ns = pb_n_star(R, e)
+    ns = continuous_optimal_n(R, e)
     lo = np.maximum(np.floor(ns), 2).astype(np.int64)
     hi = np.maximum(np.ceil(ns), 2).astype(np.int64)
     out = np.where(mvg_gain(R, e, hi) > mvg_gain(R, e, lo), hi, lo)

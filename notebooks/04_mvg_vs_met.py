@@ -196,7 +196,7 @@ print(f"gain ratio falls with e at {frac_down:.1%} of the steps")
 assert frac_down > 0.9
 from scipy.optimize import brentq  # noqa: E402
 
-R_4 = 10 ** brentq(lambda lr: rigid.pb_gain_star(10**lr, 0.8) - 0.8 / 0.2, -8, -0.5, xtol=1e-14)
+R_4 = 10 ** brentq(lambda lr: rigid.continuous_optimal_gain(10**lr, 0.8) - 0.8 / 0.2, -8, -0.5, xtol=1e-14)
 assert abs(R_4 - 0.0242) < 5e-5  # G*(R) = e/(1-e) = 4 for e = 0.8 (Eqs 24, 30)
 n_small = rigid.mvg_optimal_n(1e-4, 0.8)
 assert n_small == 10 and np.isclose(g_eq20(1e-4, 0.8, n_small), 21.5244, atol=5e-5)

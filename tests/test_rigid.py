@@ -212,14 +212,14 @@ def test_eq23_misprint_derived_from_maximising_eq20():
         f = lambda n: -_eq20_real_n(R, e, n)
         res = minimize_scalar(f, bounds=(1.5, 60), method="bounded", options={"xatol": 1e-10})
         x_opt = R ** (1 / (res.x - 1))
-        x0 = rigid.pb_x0(e)
+        x0 = rigid.optimal_pair_ratio(e)
         assert x0 == pytest.approx(x_opt, rel=1e-6)
         assert 1 + x0 == pytest.approx((1 + e) * x0 ** (x0 / (1 + x0)), rel=1e-13)  # corrected Eq 23
         printed = lambda x: (1 + x) - (1 + e) * x ** (x / 1 + x)  # the literal print: exponent x + x
         assert abs(printed(x_opt)) > 1e-2
         x_printed = brentq(printed, 1e-12, 1 - 1e-12)
         assert abs(x_printed - x_opt) > 1e-2
-        assert rigid.pb_n_star(R, e) == pytest.approx(res.x, rel=1e-5)  # Eq 22
+        assert rigid.continuous_optimal_n(R, e) == pytest.approx(res.x, rel=1e-5)  # Eq 22
 
 
 def test_eq23_root_structure():
@@ -232,24 +232,24 @@ def test_eq23_root_structure():
         assert x_big > 1
         x = np.linspace(1e-9, 1 - 1e-9, 10001)
         assert np.sum(np.diff(np.sign(h(x, e))) != 0) == 1
-        assert 0 < rigid.pb_x0(e) < 1
-        assert h(rigid.pb_x0(e), e) == pytest.approx(0.0, abs=1e-14)
+        assert 0 < rigid.optimal_pair_ratio(e) < 1
+        assert h(rigid.optimal_pair_ratio(e), e) == pytest.approx(0.0, abs=1e-14)
     with pytest.raises(ParameterError, match="e"):
-        rigid.pb_x0(1.0)
+        rigid.optimal_pair_ratio(1.0)
 
 
 def test_eq24_misprint_gstar_is_eq20_at_continuous_nstar():
     for R, e in [(0.012, 0.8), (1e-4, 0.6), (0.2, 0.95)]:
-        ns = rigid.pb_n_star(R, e)
+        ns = rigid.continuous_optimal_n(R, e)
         eq20_at_ns = _eq20_real_n(R, e, ns)  # Eq 20, real n
-        assert rigid.pb_gain_star(R, e) == pytest.approx(eq20_at_ns, rel=1e-12)
+        assert rigid.continuous_optimal_gain(R, e) == pytest.approx(eq20_at_ns, rel=1e-12)
         printed = (1 + e) ** ns / (1 + R) ** (ns - 1) - 1  # Eq 24 as printed
         assert abs(printed - eq20_at_ns) > 0.05 * abs(eq20_at_ns)
         # G* bounds the integer optimum and is the continuous maximum (minimize_scalar)
         res = minimize_scalar(lambda n: -_eq20_real_n(R, e, n),
                               bounds=(1.5, 60), method="bounded", options={"xatol": 1e-10})
-        assert rigid.pb_gain_star(R, e) == pytest.approx(-res.fun, rel=1e-10)
-        assert rigid.pb_gain_star(R, e) >= rigid.mvg_gain(R, e, rigid.mvg_optimal_n(R, e)) - 1e-12
+        assert rigid.continuous_optimal_gain(R, e) == pytest.approx(-res.fun, rel=1e-10)
+        assert rigid.continuous_optimal_gain(R, e) >= rigid.mvg_gain(R, e, rigid.mvg_optimal_n(R, e)) - 1e-12
 
 
 def test_exact_search_and_poschel_brilliantov_agree_on_a_grid():
