@@ -28,7 +28,7 @@ _EXPORTS = {
     "ShockCondition": "standards",
     "check": "standards",
     "find_condition": "standards",
-    "Built": "builder",
+    "BuiltStack": "builder",
     "build": "builder",
     "CHI_MAPS": "calibration",
     "chi_from_restitution": "calibration",
@@ -138,7 +138,7 @@ def __dir__():
 
 if _TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
     from .analysis import Report, RigidComparison, accelerometer, analyse, independence
-    from .builder import Built, build
+    from .builder import BuiltStack, build
     from .calibration import (
         CHI_MAPS,
         chi_from_restitution,

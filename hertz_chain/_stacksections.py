@@ -33,7 +33,7 @@ from ._stackspec import (
     SOLVERS,
     SRS_BAND_LIMITS,
     SRS_MAX_SPAN,
-    BodiesSpec,
+    StackSectionSpec,
     ContactSpec,
     ContactsSpec,
     DesignSpec,
@@ -439,7 +439,7 @@ def _check_design(d: DesignSpec) -> DesignSpec:
     return d
 
 
-def _parse_stack(raw: Any, default_restitution: float | None) -> BodiesSpec:
+def _parse_stack(raw: Any, default_restitution: float | None) -> StackSectionSpec:
     if raw is None:
         raise _error("stack", "missing section [stack] (masses and gaps)")
     t = _table(raw, "stack", _STACK_KEYS)
@@ -503,7 +503,7 @@ def _parse_stack(raw: Any, default_restitution: float | None) -> BodiesSpec:
     if "shape" in t:
         shape = _per_item(t["shape"], "stack.shape", n, lambda x, k: _choice(x, k, SHAPES))
     shape, radius = _geometry(shape, radius, t, "stack")
-    return BodiesSpec(masses, design, gaps, velocities, preload, material, radius, shape, end_force)
+    return StackSectionSpec(masses, design, gaps, velocities, preload, material, radius, shape, end_force)
 
 
 def _geometry(shape, radius, t: Mapping, path: str):
@@ -561,7 +561,7 @@ def _parse_ground(raw: Any) -> GroundSpec:
     return GroundSpec(material, shape, radius)
 
 
-def _parse_wall(raw: Any, bodies: BodiesSpec, n: int | None) -> WallSpec:
+def _parse_wall(raw: Any, bodies: StackSectionSpec, n: int | None) -> WallSpec:
     t = _table(raw, "wall", _WALL_KEYS)
     material = _name(t["material"], "wall.material") if "material" in t else None
     stiffness = _positive(t["stiffness"], "wall.stiffness", "hertz_stiffness") if "stiffness" in t else None

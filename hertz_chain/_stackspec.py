@@ -130,8 +130,8 @@ class DesignSpec:
 
 
 @dataclass(frozen=True)
-class BodiesSpec:
-    """The masses and their per-body properties (`[stack]`).
+class StackSectionSpec:
+    """The `[stack]` section: the masses and their per-body properties (formerly `BodiesSpec`).
 
     Exactly one of `masses` (kg, bottom first) and `design` is set. Per-body and per-gap values are
     a single value (the same for all; always so when the number of masses is not known yet) or a
@@ -284,7 +284,7 @@ class StackSpec:
     """A whole stack file, validated, in SI units. `ground` is `None` for a chain without ground."""
 
     drop: DropSpec
-    stack: BodiesSpec
+    stack: StackSectionSpec
     contact: ContactsSpec
     ground: GroundSpec | None = GroundSpec()
     solver: SolverSpec = SolverSpec()

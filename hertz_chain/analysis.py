@@ -289,7 +289,7 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     - `srs_options`: how the top SRS is computed (`hertz_chain.spectrum.SRSOptions`; the stack file's
       `[srs]`); default maximax absolute acceleration, Q = 10, 1/12 octave, the default band.
     - `yield_limits`: `materials.YieldLimit`s of the interfaces whose materials have a yield strength
-      (`Built.yield_limits`): an interface with an elastic or viscous law whose peak Hertz pressure
+      (`BuiltStack.yield_limits`): an interface with an elastic or viscous law whose peak Hertz pressure
       (Johnson Eq. 4.24, from its largest contact force) exceeds the yield pressure `1.6 Y` gets a
       warning: the law's numbers are then an upper bound, the metal yields.
 

@@ -1,6 +1,6 @@
 """From a declarative `StackSpec` (a stack file) to what the simulator needs.
 
-`build(spec)` returns a `Built`: the `Stack` (masses, one calibrated contact law per interface,
+`build(spec)` returns a `BuiltStack`: the `Stack` (masses, one calibrated contact law per interface,
 ground, gravity), the initial `State`, the nominal restitution of every interface (for the rigid
 comparison) and the solver options. It resolves, in this order:
 
@@ -44,12 +44,12 @@ from .simulation import Tolerances
 from .stack import Stack, State, at_impact, reduced_masses, resting
 from .stackfile import ContactSpec, StackSpec
 
-__all__ = ["Built", "build", "design_masses"]
+__all__ = ["BuiltStack", "build", "design_masses"]
 
 
 @dataclasses.dataclass(frozen=True)
-class Built:
-    """A stack file resolved into simulator inputs (SI units).
+class BuiltStack:
+    """A stack file resolved into simulator inputs (SI units); `build`'s result (formerly `Built`).
 
     `nominal_restitution` `(n,)`: the restitution each interface was specified for (entry 0 = the
     ground; NaN where a law was given by its raw damping parameter and its restitution is not a
@@ -237,15 +237,15 @@ def _approach_speeds(masses, e, ground: bool, v0) -> np.ndarray:
     return speeds
 
 
-def build(spec: StackSpec) -> Built:
-    """Resolve a `StackSpec` into a `Built` (see the module docstring)."""
+def build(spec: StackSpec) -> BuiltStack:
+    """Resolve a `StackSpec` into a `BuiltStack` (see the module docstring)."""
     try:
         return _build(spec)
     except ParameterError as exc:
         raise StackFileError(f"{spec.source + ': ' if spec.source else ''}{exc}") from exc
 
 
-def _build(spec: StackSpec) -> Built:
+def _build(spec: StackSpec) -> BuiltStack:
     m = design_masses(spec)
     n = m.size
     ground = spec.has_ground
@@ -306,7 +306,7 @@ def _build(spec: StackSpec) -> Built:
         options["max_steps"] = s.max_steps
     if s.until != "cascade":
         options["until"] = s.until
-    return Built(stack=stack, state=state, masses=m, nominal_restitution=e_nom, laws=tuple(laws),
+    return BuiltStack(stack=stack, state=state, masses=m, nominal_restitution=e_nom, laws=tuple(laws),
                  simulate_options=options, n_output=s.n_output, dt_output=s.dt_output, title=spec.title,
                  yield_limits=tuple(limits[j] for j in sorted(limits)))
 

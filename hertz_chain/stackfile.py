@@ -33,7 +33,7 @@ from ._stackspec import (  # the spec and its bounds are part of this module's i
     MIN_RESTITUTION,
     SHAPES,
     SOLVERS,
-    BodiesSpec,
+    StackSectionSpec,
     ContactSpec,
     ContactsSpec,
     DesignSpec,
@@ -84,7 +84,7 @@ __all__ = [
     "SHAPES",
     "MaterialSpec",
     "DesignSpec",
-    "BodiesSpec",
+    "StackSectionSpec",
     "DropSpec",
     "GroundSpec",
     "ContactSpec",
@@ -237,7 +237,7 @@ def _build(data: Mapping) -> StackSpec:
     return StackSpec(drop_spec, bodies, contacts, ground, solver, materials, title, srs=srs, wall=wall)
 
 
-def _check_curved(contacts: ContactsSpec, bodies: BodiesSpec, ground, overrides, n) -> None:
+def _check_curved(contacts: ContactsSpec, bodies: StackSectionSpec, ground, overrides, n) -> None:
     """Hertz contact needs at least one curved face: reject flat-on-flat where stiffness is computed."""
     if bodies.shape is None:
         return

@@ -1,6 +1,6 @@
 """The workflows behind the command line: run a stack file, the rigid designs, the demo.
 
-- `run_spec(spec)` / `simulate_file(path)`: stack file → `Built` → `simulate` → `analyse` → `Report`
+- `run_spec(spec)` / `simulate_file(path)`: stack file → `BuiltStack` → `simulate` → `analyse` → `Report`
   (a run that did not complete returns its partial `Report`: read `Report.status`).
 - `design_report(...)`: the rigid MVG/MET designs of `hertz-chain design`.
 - `demo()`: the paper's optimal six-mass MVG stack, gapped and touching, against the rigid theory.

@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 
 from hertz_chain.errors import StackFileError
 from hertz_chain.stackfile import (
-    BodiesSpec,
+    StackSectionSpec,
     ContactSpec,
     DesignSpec,
     StackSpec,
@@ -641,10 +641,10 @@ def test_parse_quantity_accepts_pint_quantities_and_bare_numbers():
 
 
 def test_bodies_helpers():
-    b = BodiesSpec(masses=(1.0, 0.5, 0.25), design=None, gaps=0.01)
+    b = StackSectionSpec(masses=(1.0, 0.5, 0.25), design=None, gaps=0.01)
     assert b.n == 3 and b.gap_list(3) == (0.01, 0.01) and b.radius_list(3) is None
     with pytest.raises(ValueError):
-        BodiesSpec(masses=(1.0, 0.5), design=None, gaps=(0.1, 0.2)).gap_list(2)
+        StackSectionSpec(masses=(1.0, 0.5), design=None, gaps=(0.1, 0.2)).gap_list(2)
 
 
 @pytest.mark.parametrize("broken", ["file", "garbage"])
