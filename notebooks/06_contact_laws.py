@@ -233,7 +233,7 @@ show(fig, "contact_chi_maps")
 # promise). `hertz_chain` calibrates the clamped laws numerically, so the stacks above get exactly 0.8.
 #
 # **Library problem found here:** the diffrax simulator cannot measure an *unclamped* law. Its stopping
-# event (`simulate.py`, `_cascade_complete`: "no contact pushes", `f <= 0`) and its end-of-contact search
+# event (`_tracking.py`, `_cascade_complete`: "no contact pushes", `f <= 0`) and its end-of-contact search
 # (`_end_of_contacts`, `active = f > 0`; `Stack.separation_function`) end the contact where the force
 # first reaches zero, but an unclamped contact goes on pulling (`F < 0`) until `δ = 0`. So
 # `simulate_impact(Tsuji(..., clamp=False))` returns the *clamped* value (0.8081 instead of 0.8000 for the
