@@ -385,7 +385,10 @@ def sweep(
             _fail(f"--resume: {output} does not exist yet; run without --resume to start the sweep")
     except HertzChainError as exc:
         _fail(str(exc))
-    per_design = 8 * (len(plan.sweep.axes) + 8 + plan.spec.n)
+    from .sweeps import _EXTRA_DIM, VARIABLES
+
+    # every variable a float64 per design (n per mass or interface), the sampled values, and the markers
+    per_design = 8 * (len(VARIABLES) - len(_EXTRA_DIM) + len(_EXTRA_DIM) * plan.spec.n + len(plan.sweep.axes))
     plural = lambda k, word: f"{k} {word}{'' if k == 1 else 's'}"  # noqa: E731
     typer.echo(f"hertz-chain: sweep: {plural(plan.size, 'design')} in {plural(plan.n_chunks, 'chunk')} of "
                f"up to {plan.chunk_rows * plan.row} designs; about {plan.size * per_design / 1e6:.3g} MB uncompressed",
