@@ -39,11 +39,11 @@ class ContactEpisode:
     last one; its restitution is then NaN, by design, and says so. `peak_force` is the largest sample
     (the value the exported data hold); `peak_force_time` and `peak_force_refined` the time and value of
     the peak of the parabola through it and its neighbours (`parabolic_peak`; never below the largest
-    sample; the time is NaN where the largest force is no peak inside the record: a contact closed at
-    the first sample whose force never rose above its first value, as in a held chain the wave has not
-    reached, or a force still rising at the record's last sample), the better estimate of the true peak between the solver's steps (O(h^2) of the local step;
-    the sample alone is low by O(h^2) too, with a larger constant;
-    docs/references.md, "Peaks between steps").
+    sample), the better estimate of the true peak between the solver's steps (O(h^2) of the local step;
+    the sample alone is low by O(h^2) too, with a larger constant; docs/references.md, "Peaks between
+    steps"). The time is NaN where the largest force is no peak inside the record: a contact closed at
+    the first sample whose force never rose above its first value (a held chain the wave has not
+    reached), or a force still rising at the record's last sample.
     """
 
     interface: int
