@@ -40,8 +40,8 @@ class ContactEpisode:
     (the value the exported data hold); `peak_force_time` and `peak_force_refined` the time and value of
     the peak of the parabola through it and its neighbours (`parabolic_peak`; never below the largest
     sample), the better estimate of the true peak between the solver's steps (O(h^2) of the local step;
-    the sample alone is low by O(h^2) too, with a larger constant; docs/references.md, "Peaks between
-    steps"). The time is NaN where the largest force is no peak inside the record: a contact closed at
+    the sample alone is low by O(h^2) too, with a larger constant;
+    docs/references.md, "Peaks between steps"). The time is NaN where the largest force is no peak inside the record: a contact closed at
     the first sample whose force never rose above its first value (a held chain the wave has not
     reached), or a force still rising at the record's last sample.
     """

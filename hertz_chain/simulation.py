@@ -105,14 +105,11 @@ from .status import Status
 
 __all__ = [
     "Tolerances",
-    "Scales",
     "Trajectory",
     "Solution",
     "BatchSolution",
     "Restitution",
-    "UNTIL",
     "UnrolledTsit5",
-    "make_solver",
     "simulate",
     "simulate_batch",
     "launch_velocity",
