@@ -1,7 +1,8 @@
 """Every notebook in notebooks/ runs, in quick mode, so that none of them rots.
 
 Each `notebooks/NN_*.py` (jupytext percent format) is parsed into a notebook in memory with jupytext
-and executed cell by cell with nbclient in a `python3` kernel, with the working directory `notebooks/`
+and executed cell by cell with nbclient in a `python3` kernel (one per test worker, its namespace reset
+before each notebook: the `kernel` fixture), with the working directory `notebooks/`
 (where `_nbutil.py` lives) and `HERTZ_CHAIN_QUICK=1` (coarse grids; each notebook takes well under a
 minute). The test session's cache folder comes from `conftest.py` and reaches the kernel through the
 environment; `HERTZ_CHAIN_WRITE_TABLES` and `HERTZ_CHAIN_FIG_DIR` are removed, so a test run never
@@ -68,35 +69,54 @@ def test_notebook_parses(path):
     assert nb.metadata.get("kernelspec", {}).get("name") == "python3"
 
 
-@pytest.fixture
-def quick_env(monkeypatch):
-    monkeypatch.setenv("HERTZ_CHAIN_QUICK", "1")
-    monkeypatch.setenv("MPLBACKEND", "Agg")
+def _quick_env() -> dict:
+    env = dict(os.environ) | {"HERTZ_CHAIN_QUICK": "1", "MPLBACKEND": "Agg"}
     for var in ("HERTZ_CHAIN_WRITE_TABLES", "HERTZ_CHAIN_FIG_DIR"):
-        monkeypatch.delenv(var, raising=False)
-    return dict(os.environ)
+        env.pop(var, None)
+    return env
+
+
+@pytest.fixture(scope="module")
+def kernel():
+    """One `python3` kernel for every notebook a test worker runs (None where the kernel is not this
+    interpreter): each notebook starts with `%reset -f`, an empty namespace, but the modules it imports
+    (JAX, hertz_chain) and what they compiled stay loaded, so a notebook pays neither the kernel's start
+    nor the imports, nor a compile another notebook already made."""
+    if not _kernel_is_this_python():
+        yield None
+        return
+    from jupyter_client.manager import KernelManager
+
+    km = KernelManager(kernel_name="python3")
+    km.start_kernel(cwd=str(NOTEBOOKS), env=_quick_env())
+    yield km
+    km.shutdown_kernel(now=True)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("path", PATHS, ids=[p.stem for p in PATHS])
-def test_notebook_runs(path, quick_env):
-    if _kernel_is_this_python():
+def test_notebook_runs(path, kernel):
+    if kernel is not None:
         from nbclient import NotebookClient
         from nbclient.exceptions import CellExecutionError
 
         nb = jupytext.read(path)
-        client = NotebookClient(nb, timeout=TIMEOUT, kernel_name="python3",
+        nb.cells.insert(0, nbformat.v4.new_code_cell("%reset -f"))  # the namespace as a fresh kernel's
+        client = NotebookClient(nb, km=kernel, timeout=TIMEOUT, kernel_name="python3",
                                 resources={"metadata": {"path": str(NOTEBOOKS)}})
         try:
-            client.execute(cwd=str(NOTEBOOKS), env=quick_env)
+            client.execute()
         except CellExecutionError as exc:  # the failing cell's source and traceback
             text = re.sub(r"\x1b\[[0-9;]*m", "", str(exc))  # drop the terminal colours
             pytest.fail(f"{path.name}: a cell failed\n{text}", pytrace=False)
+        finally:
+            if client.kc is not None:
+                client.kc.stop_channels()
         errors = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
                   if o.get("output_type") == "error"]
         assert not errors
     else:
-        proc = subprocess.run([sys.executable, path.name], cwd=NOTEBOOKS, env=quick_env, capture_output=True,
+        proc = subprocess.run([sys.executable, path.name], cwd=NOTEBOOKS, env=_quick_env(), capture_output=True,
                               text=True, timeout=TIMEOUT)
         if proc.returncode != 0:
             pytest.fail(f"{path.name} failed (run as a script):\n{proc.stderr[-4000:]}", pytrace=False)
