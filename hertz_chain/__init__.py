@@ -123,9 +123,15 @@ __version__ = "0.1.0"
 __all__ = sorted(_EXPORTS)
 
 
+#: Public names renamed in this round (CHANGELOG.md): an old name fails with the new one in its message.
+_RENAMED = {"Built": "BuiltStack"}
+
+
 def __getattr__(name: str):
     module = _EXPORTS.get(name)
     if module is None:
+        if name in _RENAMED:
+            raise AttributeError(f"hertz_chain.{name} is renamed {_RENAMED[name]} (CHANGELOG.md)")
         raise AttributeError(f"module 'hertz_chain' has no attribute {name!r}")
     value = getattr(_importlib.import_module(f".{module}", __name__), name)
     globals()[name] = value

@@ -62,9 +62,10 @@ def report_figure(report: Report):
     pv = srs is not None and getattr(srs, "kind", "acceleration") == "pseudo-velocity"
     ax.set(xlabel="natural frequency (Hz)",
            ylabel="pseudo-velocity (m/s)" if pv else "peak absolute acceleration (g)")
-    # the primary cascade: up to a little after the top mass's last contact
+    # the primary cascade: up to a little after the top mass's last contact (a chain held by an end force or
+    # a far wall never flies apart: its whole record, the wall's contact included)
     top_eps = [ep for ep in report.episodes if ep.interface == n - 1]
-    if top_eps:
+    if top_eps and not report.solution.stack.held:
         t_end = 1e3 * max(ep.end for ep in top_eps) * 1.15
         for ax in axes[0]:
             ax.set_xlim(0.0, t_end)

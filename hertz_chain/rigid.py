@@ -779,3 +779,13 @@ def design_ratios(R, e, *, at_met_ratio: bool = False) -> DesignRatios:
         efficiency=mvg_efficiency(Rm, e, n_mvg) / k_met,
         total_mass=mvg_total_mass(Rm, n_mvg) / m_met,
     )
+
+
+#: Names renamed in this round (CHANGELOG.md): an old name fails with the new one in its message.
+_RENAMED = {"pb_x0": "optimal_pair_ratio", "pb_n_star": "continuous_optimal_n", "pb_gain_star": "continuous_optimal_gain"}
+
+
+def __getattr__(name: str):
+    if name in _RENAMED:
+        raise AttributeError(f"hertz_chain.rigid.{name} is renamed {_RENAMED[name]} (CHANGELOG.md)")
+    raise AttributeError(f"module 'hertz_chain.rigid' has no attribute {name!r}")

@@ -54,3 +54,17 @@ def test_cpu_cores_become_devices_unless_the_user_chose():
                                    "XLA_FLAGS": "--xla_force_host_platform_device_count=5"}) == 5
     started = "import jax; jax.devices(); import hertz_chain.simulation; print(jax.local_device_count())"
     assert _devices_in_subprocess({"HERTZ_CHAIN_CPU_DEVICES": "3"}, started) == 1
+
+
+def test_a_renamed_name_fails_with_its_new_name():
+    # CHANGELOG.md's table: the old public names point to the new ones
+    import pytest
+
+    from hertz_chain import rigid
+
+    with pytest.raises(AttributeError, match="renamed BuiltStack"):
+        hc.Built  # noqa: B018
+    with pytest.raises(AttributeError, match="renamed optimal_pair_ratio"):
+        rigid.pb_x0  # noqa: B018
+    with pytest.raises(AttributeError, match="has no attribute 'nothing'"):
+        hc.nothing  # noqa: B018

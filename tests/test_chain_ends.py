@@ -196,6 +196,7 @@ def test_chain_between_two_walls_from_a_stack_file_matches_scipy(tmp_path):
     y = np.asarray(line.get_ydata())
     assert y[0] == pytest.approx(f0 / 1e3, rel=1e-9)
     assert 2 * f0 / 1e3 < y.max() <= report.wall_peak_force / 1e3 * (1 + 1e-12)
+    assert fig.axes[1].get_xlim()[1] >= 1e3 * float(sol.t_final)  # a held chain: its whole record is drawn
 
 
 def test_one_bead_bounces_between_the_ground_and_a_wall_with_hertz_contact_times(tmp_path):
