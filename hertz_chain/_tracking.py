@@ -123,8 +123,8 @@ def _cascade_complete(t, ys, args, **kwargs):
 
 
 # columns of `_Contacts.rows`: the latest accepted point in contact, then the first point after it (its
-# time, overlap, overlap rate, lower and upper body velocities, memory `q`)
-T_IN, T_OUT, DELTA_OUT, RATE_OUT, V_LOWER_OUT, V_UPPER_OUT, Q_OUT = range(7)
+# time, overlap, overlap rate, lower and upper body velocities, the overlap's second derivative, memory `q`)
+T_IN, T_OUT, DELTA_OUT, RATE_OUT, V_LOWER_OUT, V_UPPER_OUT, ACC_OUT, Q_OUT = range(8)
 # rows of `_Contacts.peaks` (audit mode): the largest force, the upper and lower bodies' velocities before and
 # after the first contact, and the first points in and after that contact
 (PEAK_FORCE, V_UPPER_BEFORE, V_LOWER_BEFORE, V_UPPER_AFTER, V_LOWER_AFTER, T_FIRST_IN,
@@ -136,9 +136,11 @@ class _Contacts(eqx.Module):
     that launch velocities and the energy audit need no step history (a history of `max_steps` rows is
     the dominant cost of a vmapped solve, where every step selects over the whole buffer).
 
-    `rows (n, 6)` (`(n, 7)` with a law with memory): per interface, the latest accepted point in contact (scaled time, -1 if never) and the
-    first accepted point after it (scaled time, SI overlap, overlap rate, and the velocities of the lower
-    and upper body, 0 for the ground, and the memory `q` of a law with memory, else 0); `now (n,)`: in contact at the latest point; `cascade (n + 5,)`:
+    `rows (n, 7)` (`(n, 8)` with a law with memory): per interface, the latest accepted point in contact
+    (scaled time, -1 if never) and the first accepted point after it (scaled time, SI overlap, overlap
+    rate, the velocities of the lower and upper body, 0 for the ground, the overlap's second derivative
+    there, from the step's derivative `dys`, and the memory `q` of a law with memory); `now (n,)`: in
+    contact at the latest point; `cascade (n + 5,)`:
     `[over, rebounds, t_c, top_done, v_top, v_c...]`: whether the first cascade is over (`_cascade_over` held
     at an accepted point; `rows` and `now` are then frozen), whether any contact closed after that, its
     scaled time `t_c`, whether the top mass has passed the apex of its flight after its last push (the
@@ -162,18 +164,22 @@ class _Contacts(eqx.Module):
     peaks: Array | None = None
 
     @staticmethod
-    def update(c: _Contacts | None, t, ys, args, audit: bool, launch: bool = False) -> _Contacts:
+    def update(c: _Contacts | None, t, ys, args, audit: bool, launch: bool = False, dys=None) -> _Contacts:
+        """The bookkeeping after the accepted point `(t, ys)` (scaled); `dys`: the scaled derivative
+        there (`_scaled_field`; None at `t0`, where no contact has ended)."""
         stack, scale = args.stack, args.scale
         n = stack.n
         y = ys[: scale.shape[0]] * scale
         x, v, _ = stack.split(y)
+        # the overlaps' second derivatives (SI): linear in the accelerations, as the rates in the velocities
+        acc = jnp.zeros(n) if dys is None else stack.overlap_rates(dys[n : 2 * n] * scale[n : 2 * n] / args.T)
         q = stack.memory(y)
         d, dd = stack.overlaps(x), stack.overlap_rates(v)
         active = stack.in_contact(d, dd, q) & stack.interface_mask()
         e = stack.total_energy(y) if audit else None
         v_top = ys[2 * n - 1]
         if c is None:
-            cols = 7 if q is not None else 6
+            cols = 8 if q is not None else 7
             c = _Contacts(jnp.broadcast_to(jnp.asarray([-1.0] + [0.0] * (cols - 1)), d.shape + (cols,)),
                           active & False, jnp.concatenate([jnp.zeros(4), v_top[None], ys[n : 2 * n]]),
                           None if e is None else (e, 0.0 * e),
@@ -185,8 +191,8 @@ class _Contacts(eqx.Module):
         t = jnp.broadcast_to(t, d.shape).astype(d.dtype)
         v_lo = jnp.concatenate([jnp.zeros(1, v.dtype), v[:-1]])
         extra = [] if q is None else [q]  # a law with memory: its memory after the contact
-        rows = jnp.where(jnp.stack([active] + [left] * (5 + len(extra)), axis=-1) & ~frozen[:, None],
-                         jnp.stack([t, t, d, dd, v_lo, v] + extra, axis=-1), c.rows)
+        rows = jnp.where(jnp.stack([active] + [left] * (6 + len(extra)), axis=-1) & ~frozen[:, None],
+                         jnp.stack([t, t, d, dd, v_lo, v, acc] + extra, axis=-1), c.rows)
         now = jnp.where(frozen, c.now, active)
         over = _cascade_over(t[0], ys, args, x, v, d, dd, active, q)
         if launch and n >= 2:  # `until="launch"`: or as soon as the top mass's launch is final
@@ -269,7 +275,10 @@ class _Tracked(dfx.AbstractWrappedSolver):
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
         inner, contacts = solver_state
         y1, y_error, dense_info, inner, result = self.solver.step(terms, t0, t1, y0, args, inner, made_jump)
-        contacts = _Contacts.update(contacts, t1, y1, args, self.audit, self.launch)
+        # the derivative at the step's end: the first-same-as-last stage of the default solver
+        # (`UnrolledTsit5`'s state is f(t1, y1)), else one more evaluation
+        dys = inner if isinstance(inner, jax.Array) and inner.shape == y1.shape else terms.vf(t1, y1, args)
+        contacts = _Contacts.update(contacts, t1, y1, args, self.audit, self.launch, dys)
         # the cascade-over flag, read by the stopping event (`_scaled_field`); its derivative is zero, so
         # its error estimate is zero already
         y1 = y1.at[-1].set(contacts.cascade[0])
@@ -290,7 +299,13 @@ def _end_of_contacts(stack: Stack, c: _Contacts, time_scale, t_final):
     t_r = jnp.where(ended, c.rows[:, T_OUT] * time_scale, 0.0)
     d_r, dd_r = jnp.where(ended, c.rows[:, DELTA_OUT], 0.0), jnp.where(ended, c.rows[:, RATE_OUT], 0.0)
     q_r = c.rows[:, Q_OUT] if stack.has_memory else None  # the memory after the contact (constant while open)
-    curv = jnp.where((cols == 0) & stack.ground, stack.gravity, 0.0)  # ground: delta_0 = -x_1 is a parabola
+    # the overlap's second derivative at the recorded point: the back-extrapolation from there is exact while
+    # both bodies fly freely (0 between two masses, g at the ground) and keeps the contact end accurate to
+    # O(h^3) when a neighbouring contact still pushes one of them (else a first-order extrapolation missed
+    # the end by up to ~0.1 of the step, and a launch velocity under gravity by g times that). Its value is
+    # the recorded one; its derivative that of free flight (the replayed adjoint maps no cotangent to it)
+    free = jnp.where((cols == 0) & stack.ground, stack.gravity, 0.0)
+    curv = free + jax.lax.stop_gradient(jnp.where(ended, c.rows[:, ACC_OUT], free) - free)
     lo0 = jnp.where(ended, t_k - t_r, -1.0)
 
     def sep(s, d_r, dd_r, curv):

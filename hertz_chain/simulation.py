@@ -47,11 +47,15 @@ limit from the physics (`_default_t_max`); reaching it, or `max_steps`, first le
 **Launch velocities.** The launch velocity of a mass is its velocity when its last push of the first
 cascade ended: the contact force of its last contact returned to zero (the one definition of a contact's
 end, shared by `hertz_chain.episodes`, the pulses and `restitution`). The end `t_end` is located inside
-the solver step where the force drops to zero by extrapolating both bodies in free flight from the
-first accepted point after it and solving `G(t) = 0` for the separation function `G` of
-`Stack.separation_function`: bisection, then one Newton step for the derivative (implicit function
-theorem), so the launch velocity is differentiable. The velocity of each body at that accepted point is
-recorded, and `v_launch = v(t_r) + g (t_r - t_end)` (free flight in between: exact). The bracketing
+the solver step where the force drops to zero by extrapolating the overlap back from the first accepted
+point after it, `t_r`, as a parabola (its value, rate and second derivative there: exact while both bodies
+fly freely, and accurate to O(h^3) when a neighbouring contact still pushes one of them) and solving
+`G(t) = 0` for the separation function `G` of `Stack.separation_function`: bisection, then one Newton
+step for the derivative (implicit function theorem), so the launch velocity is differentiable. The
+velocity of each body at that accepted point is recorded, and `v_launch = v(t_r) + g (t_r - t_end)` (the
+mass itself flies freely in between: exact). A straight-line extrapolation missed the end by up to ~5e-8 s
+where the contact below still pushed, which moved a launch velocity under gravity by g times that
+(`tests/test_launch_gravity.py`, "a launch while a neighbour still pushes"). The bracketing
 points, the recorded velocities and the energy audit are kept while solving, in the solver state of a
 wrapper around the diffrax solver (`_Tracked`; diffrax keeps the state of accepted steps only), so no
 step history is needed: `launch_velocity` and `simulate_batch(..., save_steps=False)` save none, and
