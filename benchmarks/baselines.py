@@ -52,7 +52,8 @@ FIRST_STEP = hc.Tolerances().first_step  # scaled units, the library default
 def field_into(out, f, fel, dd, ys, m, k, c, ground, scale, T):
     """The scaled vector field of a stack (`hertz_chain._solve._scaled_field`) written into `out`, for a
     state of `3n` entries `[x, v, D]` or, with the library's onset proxies (`Tolerances.resolve_onsets`,
-    its default), `4n` entries `[x, v, D, z]` with `z_j' = sqrt(max(delta_j, 0) / L)`: Hertz `k d^1.5`
+    its default), `4n` entries `[x, v, D, z]` with `z_j' = sqrt(max(delta_j, 0) / L) + sqrt(F_j / F_s)`,
+    `F_s = m*_j V^2 / L`: Hertz `k d^1.5`
     plus Tsuji damping `c d^0.25 d'` (c = eta sqrt(m_eff k); 0 for Hertz), clamped >= 0. `f`, `fel`, `dd`
     are scratch arrays of length n. The flag entry of the library's state (no dynamics) is left out."""
     n = m.shape[0]
@@ -67,14 +68,17 @@ def field_into(out, f, fel, dd, ys, m, k, c, ground, scale, T):
         dd[j] = r
         f[j] = 0.0
         fel[j] = 0.0
-        if proxy:
-            on = ground or j > 0
-            out[3 * n + j] = math.sqrt((d if d > 0.0 else 0.0) / scale[0] + 1e-300) if on else 0.0
         if d > 0.0:
             el = k[j] * d * math.sqrt(d)
             fj = el + c[j] * math.sqrt(math.sqrt(d)) * r
             fel[j] = el
             f[j] = fj if fj > 0.0 else 0.0
+        if proxy:
+            on = ground or j > 0
+            mu = m[0] if j == 0 else m[j - 1] * m[j] / (m[j - 1] + m[j])
+            fs = mu * scale[n] * scale[n] / scale[0]
+            out[3 * n + j] = (math.sqrt((d if d > 0.0 else 0.0) / scale[0] + 1e-300)
+                              + math.sqrt(f[j] / fs + 1e-300)) if on else 0.0
     for i in range(n):
         above = f[i + 1] if i + 1 < n else 0.0
         out[i] = T * ys[n + i] * scale[n + i] / scale[i]

@@ -45,16 +45,19 @@ def _scaled_field(t, ys, args):
     stack, scale, T = args.stack, args.scale, args.T
     n3 = scale.shape[0]
     y = ys[:n3] * scale
-    dy = T * stack.vector_field(t * T, y) / scale
-    if ys.shape[0] == n3:
-        return dy
-    parts = [dy]
-    if ys.shape[0] > n3 + 1:
-        # onset proxy: z_j' = sqrt(delta_j+ / L), whose local error is O(h^1.5) at a contact onset, so the
-        # step controller resolves every onset (the kink of F ~ delta^{3/2}) to the tolerance
-        d = stack.overlaps(stack.split(y)[0]) / scale[0]
-        parts.append(jnp.sqrt(jnp.where(d > 0, d, 0.0) + 1e-300) * stack.interface_mask())
-    return jnp.concatenate(parts + [jnp.zeros(1, dy.dtype)])
+    if ys.shape[0] <= n3 + 1:  # no onset proxies
+        dy = T * stack.vector_field(t * T, y) / scale
+        return dy if ys.shape[0] == n3 else jnp.concatenate([dy, jnp.zeros(1, dy.dtype)])
+    dy, f = stack.vector_field_and_forces(t * T, y)
+    dy = T * dy / scale
+    # onset proxy (`Tolerances.resolve_onsets`): z_j' = sqrt(delta_j+ / L) + sqrt(F_j / F_s), F_s = m*_j V^2 / L,
+    # whose local error is O(h^1.5) wherever a contact closes (the kink of F ~ delta^{3/2}; the steeper rise
+    # of a damped law) and wherever a clamped contact lets go (its force's kink at F = 0), so the step
+    # controller resolves both to the tolerance (docs/solver-defaults.md, "Default tolerances")
+    d = stack.overlaps(stack.split(y)[0]) / scale[0]
+    f_s = stack.effective_masses() * scale[stack.n] ** 2 / scale[0]
+    z = jnp.sqrt(jnp.where(d > 0, d, 0.0) + 1e-300) + jnp.sqrt(jnp.where(d > 0, jnp.maximum(f, 0.0), 0.0) / f_s + 1e-300)
+    return jnp.concatenate([dy, z * stack.interface_mask(), jnp.zeros(1, dy.dtype)])
 
 
 def _derived(stack: Stack, y):

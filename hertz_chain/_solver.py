@@ -26,12 +26,14 @@ class Tolerances(eqx.Module):
     - `pcoeff`, `icoeff`: PID coefficients (0.4, 0.3: docs/references.md, "Solver notes").
     - `max_step`: the largest step, in units of the contact time `T` (0.5 never steps over a contact).
     - `first_step`: the first step, in units of `T`.
-    - `resolve_onsets`: add one auxiliary state per interface, `z_j' = sqrt(delta_j+/L)`, whose local
-      error is `O(h^1.5)` where a contact starts, so that the controller resolves every contact onset
-      (where `F ~ delta^{3/2}` is not smooth) to the tolerance. The solution barely needs it, but
-      derivatives do: the tangent of the discretised solve is not error-controlled, and without this
-      the gradient with respect to gaps is only accurate to ~`sqrt(tol)` in units of `V/L`.
-      It also removes the heavy tail of the launch-velocity error (module docstring). Default on;
+    - `resolve_onsets`: add one auxiliary state per interface, `z_j' = sqrt(delta_j+/L) + sqrt(F_j/F_s)`
+      (`F_s = m*_j V^2/L`), whose local error is `O(h^1.5)` where a contact starts (where `F ~ delta^{3/2}`
+      is not smooth, or a damped law's force rises faster) and where a clamped contact lets go (the
+      kink of its force at `F = 0`), so that the controller resolves both to the tolerance. Derivatives
+      need the onsets resolved: the tangent of the discretised solve is not error-controlled, and
+      without this the gradient with respect to gaps is only accurate to ~`sqrt(tol)` in units of
+      `V/L`. Both terms remove the heavy tail of the launch-velocity error (docs/solver-defaults.md,
+      "Default tolerances": damped laws 4e-7 -> 6e-9 at 1e-10, for 15 % more steps). Default on;
       `False` integrates exactly the `3n` equations (as the scipy comparison in the benchmarks does).
     """
 

@@ -27,7 +27,8 @@ out) or any row of `hertz_chain.registry.SOLVERS`, or a diffrax solver instance.
 for Hertzian contact, so an explicit method is the right default.
 
 **Default tolerances** `rtol = atol = 1e-10` in the scaled units, with `Tolerances.resolve_onsets`
-(an auxiliary state that makes the step controller resolve every contact onset); `launch_velocity`
+(an auxiliary state that makes the step controller resolve every contact onset and every release of a
+clamped contact); `launch_velocity`
 uses `1e-11` for its gradients. **Step control:** diffrax's PID controller (`pcoeff = 0.4`,
 `icoeff = 0.3`) with a largest step of half a contact time, so a free flight never steps over a contact.
 

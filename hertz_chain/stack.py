@@ -405,14 +405,19 @@ class Stack(eqx.Module):
         no-tension clamp, `F_j = 0` while `F^el_j > 0` on separation, which also dissipates); with a
         law with memory, its own `dissipated_power` and `dq_j/dt = memory_rate` (`Thornton`).
         """
+        return self.vector_field_and_forces(t, y)[0]
+
+    def vector_field_and_forces(self, t, y: Array) -> tuple[Array, Array]:
+        """`vector_field(t, y)` and the `(..., n)` contact forces (N) it used (one evaluation of the
+        laws; the solver's onset proxy reads the forces, `hertz_chain._solve._scaled_field`)."""
         x, v, _ = self.split(y)
         q = self.memory(y)
         d, dd = self.overlaps(x), self.overlap_rates(v)
         f = self.forces(d, dd, q)
         if q is None:  # the common path: the damping part's power, from the forces at hand
-            return jnp.concatenate([v, self.accelerations(f, x), (f - self.elastic_forces(d)) * dd], axis=-1)
+            return jnp.concatenate([v, self.accelerations(f, x), (f - self.elastic_forces(d)) * dd], axis=-1), f
         parts = [v, self.accelerations(f, x), self.dissipated_powers(d, dd, q), self.memory_rates(d, dd, q)]
-        return jnp.concatenate(parts, axis=-1)
+        return jnp.concatenate(parts, axis=-1), f
 
     def energies(self, y: Array) -> dict[str, Array]:
         """Kinetic, gravitational (zero at `x = 0`; with the end force's potential `F0 x_n`), elastic and
