@@ -71,9 +71,13 @@ def report_figure(report: Report):
             ax.set_xlim(0.0, t_end)
     for a in axes.flat:
         a.grid(True, which="both" if a.get_xscale() == "log" else "major", alpha=0.4)
-    fig.suptitle(f"Top launch gain {report.top_velocity_gain:.4f} (rigid theory: "
-                 f"{'—' if report.rigid.nominal_gain is None else format(report.rigid.nominal_gain, '.4f')}), "
-                 f"regime: {report.regime}")
+    if report.solution.stack.held:  # an end force or a far wall: no launch, no rigid cascade
+        fig.suptitle(f"Held chain: top velocity at t_max / striker speed {report.top_velocity_gain:.4f}, "
+                     f"regime: {report.regime}")
+    else:
+        fig.suptitle(f"Top launch gain {report.top_velocity_gain:.4f} (rigid theory: "
+                     f"{'—' if report.rigid.nominal_gain is None else format(report.rigid.nominal_gain, '.4f')}), "
+                     f"regime: {report.regime}")
     return fig
 
 

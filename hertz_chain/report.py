@@ -174,20 +174,26 @@ def summary_table(report: Report, title: str | None = None) -> str:
                         if done else "the gains below are not those of a finished cascade"))
     if math.isfinite(r.cascade_end_time):
         lines.append(f"first cascade ended at {r.cascade_end_time * 1e3:.4g} ms")
-    lines.append(f"drop speed {r.drop_speed:.4g} m/s, {len(r.masses)} mass{'es' if len(r.masses) != 1 else ''} "
+    held = bool(r.solution.stack.held)  # an end force or a far wall: no launch, the velocities at t_max
+    # a stack falls onto the ground at its drop speed; a chain (no ground, or held) is struck at its striker's
+    speed = "drop speed" if r.ground and not held else "striker speed"
+    lines.append(f"{speed} {r.drop_speed:.4g} m/s, {len(r.masses)} mass{'es' if len(r.masses) != 1 else ''} "
                  f"({', '.join(f'{m:.4g}' for m in r.masses)} kg)")
     lines.append("")
-    lines.append("top-mass velocity gain G_n = V_n / v_ff")
+    lines.append("top-mass velocity at t_max over the striker speed (a held chain has no launch)" if held
+                 else "top-mass velocity gain G_n = V_n / v_ff")
     lines.append(f"  {model_label(r):<40}{_fmt(r.top_velocity_gain)}")
-    lines.append(f"  rigid, Eq 19 with nominal e             {_fmt(r.rigid.nominal_gain)}"
-                 f"{_err(r.rigid.nominal_gain, r.top_velocity_gain)}")
-    lines.append(f"  rigid, Eq 19 with measured e_eff        {_fmt(r.rigid.measured_restitution_gain)}"
-                 f"{_err(r.rigid.measured_restitution_gain, r.top_velocity_gain)}")
-    lines.append(f"  rigid, event-driven with measured e_eff {_fmt(r.rigid.event_driven_gain)}"
-                 f"{_err(r.rigid.event_driven_gain, r.top_velocity_gain)}")
+    if not held:  # no rigid cascade for a chain that never flies apart (its note says so)
+        lines.append(f"  rigid, Eq 19 with nominal e             {_fmt(r.rigid.nominal_gain)}"
+                     f"{_err(r.rigid.nominal_gain, r.top_velocity_gain)}")
+        lines.append(f"  rigid, Eq 19 with measured e_eff        {_fmt(r.rigid.measured_restitution_gain)}"
+                     f"{_err(r.rigid.measured_restitution_gain, r.top_velocity_gain)}")
+        lines.append(f"  rigid, event-driven with measured e_eff {_fmt(r.rigid.event_driven_gain)}"
+                     f"{_err(r.rigid.event_driven_gain, r.top_velocity_gain)}")
     for note in r.rigid.notes:
         lines.append(f"  note: {note}")
-    lines.append(f"  energy transfer to the top mass K_n = {_fmt(r.top_efficiency)}")
+    if not held:
+        lines.append(f"  energy transfer to the top mass K_n = {_fmt(r.top_efficiency)}")
     lines.append("")
     lines.append("mass  gain     | interface  e_nominal  e_eff    episodes")
     nominal = r.rigid.nominal_restitution
@@ -198,10 +204,12 @@ def summary_table(report: Report, title: str | None = None) -> str:
         label = "ground-1" if j == 0 else f"{j}-{j + 1}"
         e_nom = None if nominal is None or j < first else float(nominal[j])
         e_eff = float(r.restitution[j]) if j >= first else None
-        right = f"{label:<10} {_fmt(e_nom, '.4f'):>9}  {_fmt(e_eff, '.4f'):>7}  {count:>4}" if j >= first else ""
+        right = f"{label:<10} {_fmt(e_nom, '.4f'):>9}  {_fmt(e_eff, '.4f'):>7}  {count:>4}" if j >= first else \
+            "(no ground: mass 1 has no interface below it)"
         lines.append(f"{i + 1:>4}  {_fmt(float(gain), '.4f'):>7}  | {right}")
-    lines.append("  gain: the mass's launch velocity (when its last push of the first cascade ended; upward > 0) over "
-                 "the drop speed")
+    lines.append("  gain: the mass's velocity at t_max (upward > 0) over the striker speed" if held else
+                 f"  gain: the mass's launch velocity (when its last push of the first cascade ended; upward > 0) over "
+                 f"the {speed}")
     lines.append("  e_eff: separation over approach speed of the interface's main contact; episodes: its contacts "
                  "in the first cascade")
     lines.append("")

@@ -197,6 +197,12 @@ def test_chain_between_two_walls_from_a_stack_file_matches_scipy(tmp_path):
     assert y[0] == pytest.approx(f0 / 1e3, rel=1e-9)
     assert 2 * f0 / 1e3 < y.max() <= report.wall_peak_force / 1e3 * (1 + 1e-12)
     assert fig.axes[1].get_xlim()[1] >= 1e3 * float(sol.t_final)  # a held chain: its whole record is drawn
+    # a held chain has no launch: the text and the figure say what its "gain" is, and no rigid line or
+    # energy transfer to a launched top mass is printed
+    text = summary_table(report)
+    assert "top-mass velocity at t_max over the striker speed" in text and "striker speed 0.05 m/s" in text
+    assert "rigid, Eq 19" not in text and "energy transfer" not in text and "G_n = V_n / v_ff" not in text
+    assert fig._suptitle.get_text().startswith("Held chain: top velocity at t_max / striker speed")
 
 
 def test_one_bead_bounces_between_the_ground_and_a_wall_with_hertz_contact_times(tmp_path):
