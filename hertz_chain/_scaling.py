@@ -92,9 +92,12 @@ class FieldArgs(eqx.Module):
     """What the scaled vector field (`_solve._scaled_field`) and the contact tracking (`_tracking`) read
     besides the state: the system, the state's scale vector (`Scales.vector`), the time scale `T` (s), and
     the scaled initial velocities `v0s` (a contact has happened once a velocity departs from free flight;
-    None where no tracking runs, as in the replayed adjoint's steps)."""
+    None where no tracking runs, as in the replayed adjoint's steps), and `inv_force`, per interface the
+    inverse of the onset proxy's force scale `F_s = m*_j V^2 / L` (computed once per solve; None: on the
+    fly)."""
 
     stack: Stack
     scale: Array
     T: Array
     v0s: Array | None = None
+    inv_force: Array | None = None

@@ -55,8 +55,10 @@ def _scaled_field(t, ys, args):
     # of a damped law) and wherever a clamped contact lets go (its force's kink at F = 0), so the step
     # controller resolves both to the tolerance (docs/solver-defaults.md, "Default tolerances")
     d = stack.overlaps(stack.split(y)[0]) / scale[0]
-    f_s = stack.effective_masses() * scale[stack.n] ** 2 / scale[0]
-    z = jnp.sqrt(jnp.where(d > 0, d, 0.0) + 1e-300) + jnp.sqrt(jnp.where(d > 0, jnp.maximum(f, 0.0), 0.0) / f_s + 1e-300)
+    inv_f = args.inv_force if args.inv_force is not None else \
+        scale[0] / (stack.effective_masses() * scale[stack.n] ** 2)
+    # (a law's force is zero for delta <= 0; `maximum` drops an unclamped law's tension)
+    z = jnp.sqrt(jnp.maximum(d, 0.0) + 1e-300) + jnp.sqrt(jnp.maximum(f, 0.0) * inv_f + 1e-300)
     return jnp.concatenate([dy, z * stack.interface_mask(), jnp.zeros(1, dy.dtype)])
 
 
@@ -106,7 +108,8 @@ def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _SolveConfig, hist
         t1=t1s,
         dt0=cfg.tolerances.first_step,
         y0=y0s,
-        args=FieldArgs(stack, scale, T, y0s[stack.n : 2 * stack.n]),
+        args=FieldArgs(stack, scale, T, y0s[stack.n : 2 * stack.n],
+                       scale[0] / (stack.effective_masses() * scale[stack.n] ** 2)),
         saveat=dfx.SaveAt(subs=subs, solver_state=True),
         stepsize_controller=cfg.tolerances.controller(),
         event=dfx.Event(_cascade_complete) if cfg.until != "t_max" else None,
@@ -155,7 +158,7 @@ def _launch_outputs(stack: Stack, sc: Scales, scale, core: dict, until: str = "c
     if until == "t_max":
         t_c = jnp.where(over, c.cascade[2] * sc.time, t_fin)
         v_c = jnp.where(over, c.cascade[5:] * scale[n : 2 * n], v_fin)
-    t_end_if = _end_of_contacts(stack, c, sc.time, t_c)
+    t_end_if = _end_of_contacts(stack, c, sc.time, t_c, sc.velocity)
     t_end, v_launch = _launch(stack, c, sc.time, t_end_if, t_c, v_c)
     status = core["status"]
     # a chain held by an end force or a wall never flies apart: its run ends at t_max by design

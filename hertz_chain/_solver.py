@@ -33,7 +33,7 @@ class Tolerances(eqx.Module):
       need the onsets resolved: the tangent of the discretised solve is not error-controlled, and
       without this the gradient with respect to gaps is only accurate to ~`sqrt(tol)` in units of
       `V/L`. Both terms remove the heavy tail of the launch-velocity error (docs/solver-defaults.md,
-      "Default tolerances": damped laws 4e-7 -> 6e-9 at 1e-10, for 15 % more steps). Default on;
+      "Default tolerances": damped laws 4e-7 -> 1e-8 at 1e-10, for 15 % more steps). Default on;
       `False` integrates exactly the `3n` equations (as the scipy comparison in the benchmarks does).
     """
 

@@ -123,8 +123,8 @@ def _cascade_complete(t, ys, args, **kwargs):
 
 
 # columns of `_Contacts.rows`: the latest accepted point in contact, then the first point after it (its
-# time, overlap, overlap rate, lower and upper body velocities, the overlap's second derivative, memory `q`)
-T_IN, T_OUT, DELTA_OUT, RATE_OUT, V_LOWER_OUT, V_UPPER_OUT, ACC_OUT, Q_OUT = range(8)
+# time, overlap, overlap rate, lower and upper body velocities, memory `q`)
+T_IN, T_OUT, DELTA_OUT, RATE_OUT, V_LOWER_OUT, V_UPPER_OUT, Q_OUT = range(7)
 # rows of `_Contacts.peaks` (audit mode): the largest force, the upper and lower bodies' velocities before and
 # after the first contact, and the first points in and after that contact
 (PEAK_FORCE, V_UPPER_BEFORE, V_LOWER_BEFORE, V_UPPER_AFTER, V_LOWER_AFTER, T_FIRST_IN,
@@ -136,11 +136,12 @@ class _Contacts(eqx.Module):
     that launch velocities and the energy audit need no step history (a history of `max_steps` rows is
     the dominant cost of a vmapped solve, where every step selects over the whole buffer).
 
-    `rows (n, 7)` (`(n, 8)` with a law with memory): per interface, the latest accepted point in contact
+    `rows (n, 6)` (`(n, 7)` with a law with memory): per interface, the latest accepted point in contact
     (scaled time, -1 if never) and the first accepted point after it (scaled time, SI overlap, overlap
-    rate, the velocities of the lower and upper body, 0 for the ground, the overlap's second derivative
-    there, from the step's derivative `dys`, and the memory `q` of a law with memory); `now (n,)`: in
-    contact at the latest point; `cascade (n + 5,)`:
+    rate, the velocities of the lower and upper body, 0 for the ground, and the memory `q` of a law with
+    memory); `acc (n,)`: the overlap's second derivative at that first point after it (scaled, from the
+    step's derivative `dys`; a separate array: a seventh column of `rows` cost 30 % per step, measured);
+    `now (n,)`: in contact at the latest point; `cascade (n + 5,)`:
     `[over, rebounds, t_c, top_done, v_top, v_c...]`: whether the first cascade is over (`_cascade_over` held
     at an accepted point; `rows` and `now` are then frozen), whether any contact closed after that, its
     scaled time `t_c`, whether the top mass has passed the apex of its flight after its last push (the
@@ -161,6 +162,7 @@ class _Contacts(eqx.Module):
     now: Array
     cascade: Array
     energy: tuple[Array, Array] | None
+    acc: Array
     peaks: Array | None = None
 
     @staticmethod
@@ -171,18 +173,18 @@ class _Contacts(eqx.Module):
         n = stack.n
         y = ys[: scale.shape[0]] * scale
         x, v, _ = stack.split(y)
-        # the overlaps' second derivatives (SI): linear in the accelerations, as the rates in the velocities
-        acc = jnp.zeros(n) if dys is None else stack.overlap_rates(dys[n : 2 * n] * scale[n : 2 * n] / args.T)
+        # the overlaps' second derivatives (scaled): linear in the accelerations, as the rates in the velocities
+        acc = jnp.zeros(n, ys.dtype) if dys is None else stack.overlap_rates(dys[n : 2 * n])
         q = stack.memory(y)
         d, dd = stack.overlaps(x), stack.overlap_rates(v)
         active = stack.in_contact(d, dd, q) & stack.interface_mask()
         e = stack.total_energy(y) if audit else None
         v_top = ys[2 * n - 1]
         if c is None:
-            cols = 8 if q is not None else 7
+            cols = 7 if q is not None else 6
             c = _Contacts(jnp.broadcast_to(jnp.asarray([-1.0] + [0.0] * (cols - 1)), d.shape + (cols,)),
                           active & False, jnp.concatenate([jnp.zeros(4), v_top[None], ys[n : 2 * n]]),
-                          None if e is None else (e, 0.0 * e),
+                          None if e is None else (e, 0.0 * e), acc,
                           None if e is None else jnp.stack([0.0 * d, v, jnp.concatenate([jnp.zeros(1, v.dtype), v[:-1]]),
                                                             jnp.nan * d, jnp.nan * d, jnp.nan * d, jnp.nan * d]))
         was_over, top_done = c.cascade[0] > 0, c.cascade[3] > 0
@@ -191,8 +193,9 @@ class _Contacts(eqx.Module):
         t = jnp.broadcast_to(t, d.shape).astype(d.dtype)
         v_lo = jnp.concatenate([jnp.zeros(1, v.dtype), v[:-1]])
         extra = [] if q is None else [q]  # a law with memory: its memory after the contact
-        rows = jnp.where(jnp.stack([active] + [left] * (6 + len(extra)), axis=-1) & ~frozen[:, None],
-                         jnp.stack([t, t, d, dd, v_lo, v, acc] + extra, axis=-1), c.rows)
+        rows = jnp.where(jnp.stack([active] + [left] * (5 + len(extra)), axis=-1) & ~frozen[:, None],
+                         jnp.stack([t, t, d, dd, v_lo, v] + extra, axis=-1), c.rows)
+        acc = jnp.where(left & ~frozen, acc, c.acc)
         now = jnp.where(frozen, c.now, active)
         over = _cascade_over(t[0], ys, args, x, v, d, dd, active, q)
         if launch and n >= 2:  # `until="launch"`: or as soon as the top mass's launch is final
@@ -216,7 +219,7 @@ class _Contacts(eqx.Module):
                                jnp.where(never, v, pk[V_UPPER_BEFORE]), jnp.where(never, v_lo, pk[V_LOWER_BEFORE]),
                                jnp.where(first_off, v, pk[V_UPPER_AFTER]), jnp.where(first_off, v_lo, pk[V_LOWER_AFTER]),
                                jnp.where(first_on & ~frozen, t, pk[T_FIRST_IN]), jnp.where(first_off, t, pk[T_FIRST_OUT])])
-        return _Contacts(rows, now, cascade, e, peaks)
+        return _Contacts(rows, now, cascade, e, acc, peaks)
 
 
 class _Tracked(dfx.AbstractWrappedSolver):
@@ -288,9 +291,10 @@ class _Tracked(dfx.AbstractWrappedSolver):
         return self.solver.func(terms, t0, y0, args)
 
 
-def _end_of_contacts(stack: Stack, c: _Contacts, time_scale, t_final):
+def _end_of_contacts(stack: Stack, c: _Contacts, time_scale, t_final, velocity_scale):
     """Per interface: the time its last contact ended (see module docstring), NaN if never in contact,
-    `t_final` if still in contact at the end. Differentiable through a final Newton step."""
+    `t_final` if still in contact at the end. Differentiable through a final Newton step. `time_scale`,
+    `velocity_scale`: the solve's `T` and `V` (`_Contacts.acc` is scaled)."""
     n = stack.n
     cols = jnp.arange(n)
     ever = c.rows[:, T_IN] >= 0
@@ -305,7 +309,7 @@ def _end_of_contacts(stack: Stack, c: _Contacts, time_scale, t_final):
     # the end by up to ~0.1 of the step, and a launch velocity under gravity by g times that). Its value is
     # the recorded one; its derivative that of free flight (the replayed adjoint maps no cotangent to it)
     free = jnp.where((cols == 0) & stack.ground, stack.gravity, 0.0)
-    curv = free + jax.lax.stop_gradient(jnp.where(ended, c.rows[:, ACC_OUT], free) - free)
+    curv = free + jax.lax.stop_gradient(jnp.where(ended, c.acc * velocity_scale / time_scale, free) - free)
     lo0 = jnp.where(ended, t_k - t_r, -1.0)
 
     def sep(s, d_r, dd_r, curv):
