@@ -4,7 +4,9 @@ Every cache user asks `cache_dir(kind)` for its folder:
 
 * `cache_dir("jax")`: JAX's persistent compilation cache (`_config`), with `_export`'s traced
   functions in its `export/` subfolder;
-* `cache_dir("pint")`: pint's parsed unit definitions (`units`).
+* `cache_dir("pint")`: pint's parsed unit definitions (`units`);
+* `cache_dir("sweeps")`: the designs per second of the last sweep of each structure, for the time
+  estimate printed before a sweep runs (`sweeps.recorded_rate`).
 
 The root is ``HERTZ_CHAIN_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/hertz_chain``, else
 ``~/.cache/hertz_chain``; ``HERTZ_CHAIN_NO_CACHE`` (any non-empty value) turns every cache off, and then

@@ -393,7 +393,19 @@ def sweep(
     typer.echo(f"hertz-chain: sweep: {plural(plan.size, 'design')} in {plural(plan.n_chunks, 'chunk')} of "
                f"up to {plan.chunk_rows * plan.row} designs; about {plan.size * per_design / 1e6:.3g} MB uncompressed",
                err=True)
+    from .sweeps import _done, recorded_rate
     from .sweeps import sweep as run_sweep
+
+    left = plan.size if not output.exists() else plan.size - sum(
+        (plan.region(c).stop - plan.region(c).start) * plan.row for c in _done(output))
+    rate = recorded_rate(plan, workers, scheduler)
+    if rate:  # before anything runs: the steady rate of the last sweep of this structure here
+        typer.echo(f"hertz-chain: sweep: about {left / rate:.0f} s for {plural(left, 'design')} at "
+                   f"{rate:,.0f} designs/s (the last sweep of this structure on this machine), plus compilation",
+                   err=True)
+    else:
+        typer.echo("hertz-chain: sweep: no earlier sweep of this structure here to time it by: an estimate "
+                   "follows the first chunk", err=True)
 
     def estimate(done, todo, seconds):  # once, after the first chunk (the progress bar has an ETA on a terminal)
         if done == 1 and todo > 1 and not sys.stderr.isatty():

@@ -52,7 +52,8 @@ from .keys import Slot, check_values, dimension, read_bounds, read_entry, resolv
 from .stackfile import StackSpec, load_stack_file
 from .units import parse_quantity
 
-__all__ = ["SweepSpec", "AxisSpec", "SweepResult", "read_sweep_file", "check", "sweep", "COMBINE", "SAMPLES"]
+__all__ = ["SweepSpec", "AxisSpec", "SweepResult", "read_sweep_file", "check", "sweep", "recorded_rate", "COMBINE",
+           "SAMPLES"]
 
 COMBINE = ("product", "zip")
 SAMPLES = ("sobol", "lhs", "montecarlo")
@@ -601,6 +602,61 @@ def check(path: str | Path, output: str | Path) -> tuple[_Plan, str]:
     return plan, text
 
 
+# ------------------------------------------------------------------------------------------ time estimates
+def _rate_key(plan: _Plan, workers: int | None, scheduler: str | None) -> str:
+    """What a sweep's designs per second depend on, as one string: the machine's JAX backend and device
+    count (or the Dask workers), the number of masses, the laws and the ground, and the chunk size."""
+    import jax
+
+    from . import _config  # noqa: F401  (every CPU core a device: before JAX starts, as the sweep would)
+
+    spec = plan.spec
+    n = spec.n or 0
+    laws = sorted({spec.contact_for(j).law for j in range(0 if spec.has_ground else 1, n)})
+    where = (f"dask:{scheduler}" if scheduler else f"workers:{workers}" if workers
+             else f"{jax.default_backend()}:{jax.local_device_count()}")
+    return f"{where}|n={n}|{','.join(laws)}|ground={spec.has_ground}|chunk={plan.chunk_rows * plan.row}"
+
+
+def _rates_path() -> Path | None:
+    from ._cache import cache_dir
+
+    root = cache_dir("sweeps")
+    return None if root is None else Path(root) / "rates.json"
+
+
+def recorded_rate(plan: _Plan, workers: int | None = None, scheduler: str | None = None) -> float | None:
+    """Designs per second of the last sweep of the same structure on this machine (`_rate_key`), from
+    the cache (`hertz_chain._cache`, ``sweeps/rates.json``), or None if there is none."""
+    p = _rates_path()
+    try:
+        rate = json.loads(p.read_text()).get(_rate_key(plan, workers, scheduler)) if p is not None else None
+        return float(rate["designs_per_s"]) if rate else None
+    except (OSError, ValueError, TypeError, KeyError):
+        return None
+
+
+def _record_rate(plan: _Plan, workers, scheduler, designs_per_s: float) -> None:
+    """Keep the steady rate of this run (chunks after the first, which compiles) for the next estimate;
+    silently nothing when the cache is off or not writable."""
+    p = _rates_path()
+    if p is None or not math.isfinite(designs_per_s) or designs_per_s <= 0:
+        return
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            rates = json.loads(p.read_text())
+        except (OSError, ValueError):
+            rates = {}
+        rates[_rate_key(plan, workers, scheduler)] = {"designs_per_s": designs_per_s,
+                                                      "date": time.strftime("%Y-%m-%d")}
+        tmp = p.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(json.dumps(rates, indent=1))
+        os.replace(tmp, p)
+    except OSError:
+        pass
+
+
 def sweep(path: str | Path, output: str | Path, *, workers: int | None = None, scheduler: str | None = None,
           progress: bool = False, on_chunk=None) -> SweepResult:
     """Run the sweep of the stack file `path` into the Zarr store `output` (module docstring).
@@ -624,13 +680,18 @@ def sweep(path: str | Path, output: str | Path, *, workers: int | None = None, s
     counts: dict[int, int] = {}
     bar = _progress(progress, plan, len(todo))
 
-    written = [0]
+    written, steady = [0], {}  # steady: the time and designs after the first chunk written (which compiles)
 
     def finish(c, res):
         _write_chunk(output, plan, c, res)
         written[0] += 1
+        now = time.perf_counter()
+        if written[0] == 1:
+            steady.update(t=now, designs=0)
+        else:
+            steady["designs"] += len(res["status"])
         if on_chunk is not None:
-            on_chunk(written[0], len(todo), time.perf_counter() - t0)
+            on_chunk(written[0], len(todo), now - t0)
         for code, k in zip(*np.unique(res["status"], return_counts=True)):
             counts[int(code)] = counts.get(int(code), 0) + int(k)
         if bar is not None:
@@ -645,6 +706,8 @@ def sweep(path: str | Path, output: str | Path, *, workers: int | None = None, s
     finally:
         if bar is not None:
             bar[0].stop()
+    if steady.get("designs"):
+        _record_rate(plan, workers, scheduler, steady["designs"] / (time.perf_counter() - steady["t"]))
     import zarr
 
     from .status import Status

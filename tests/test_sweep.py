@@ -333,3 +333,32 @@ def test_rigid_gain_with_the_measured_restitutions_is_the_gain_of_independent_co
     np.testing.assert_allclose(ds.rigid_gain_measured, ds.top_velocity_gain, rtol=1e-7)
     assert np.all(np.abs(ds.rigid_deficit) > 1e-3)  # the nominal e is not the e of these impacts
     assert ds.rigid_gain_measured.attrs["units"] == "1"
+
+
+def test_time_estimate_before_the_run_from_the_last_sweep_of_the_same_structure(tmp_path, monkeypatch):
+    # Issue 20: "before anything runs, the command prints the number of designs and an estimate of time".
+    # The first sweep of a structure has nothing to time it by (it says so; an estimate follows its first
+    # chunk); it records its steady rate (the chunks after the first, which compiles) in the cache, and the
+    # next sweep of the same structure prints `designs / rate` before it runs.
+    from typer.testing import CliRunner
+
+    from hertz_chain.cli import app
+    from hertz_chain.sweeps import check, recorded_rate
+
+    monkeypatch.setenv("HERTZ_CHAIN_CACHE_DIR", str(tmp_path / "cache"))
+    path = _file(tmp_path, GRID)
+    plan, _ = check(path, tmp_path / "a.zarr")
+    assert recorded_rate(plan) is None
+    res = CliRunner().invoke(app, ["sweep", str(path), "--output", str(tmp_path / "a.zarr")])
+    assert res.exit_code == 0, res.output
+    assert "no earlier sweep of this structure here" in res.stderr
+    rate = recorded_rate(plan)
+    assert rate is not None and np.isfinite(rate) and rate > 0
+    res = CliRunner().invoke(app, ["sweep", str(path), "--output", str(tmp_path / "b.zarr")])
+    assert res.exit_code == 0, res.output
+    assert f"about {6 / rate:.0f} s for 6 designs at {rate:,.0f} designs/s" in res.stderr
+    # another structure (four masses) has no record
+    other = tmp_path / "other.toml"
+    other.write_text(tomli_w.dumps(BASE | {"stack": BASE["stack"] | {"masses": [1.0, 0.5, 0.3, 0.1]},
+                                           "sweep": GRID}), encoding="utf-8")
+    assert recorded_rate(check(other, tmp_path / "c.zarr")[0]) is None
