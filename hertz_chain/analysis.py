@@ -478,7 +478,8 @@ def _warnings(sol, e_meas, e_nom, regime, tolerances) -> list[str]:
         f0 = float(np.asarray(sol.stack.end_force))
         what = " and ".join(([f"an end force ({f0:g} N)"] if f0 > 0 else [])
                             + (["a far wall"] if sol.stack.wall else []))
-        out.append(f"a chain held by {what} never flies apart: its 'launch' velocities and gains are the "
+        out.append(f"a chain held by {what} never flies apart as a whole (its contacts may open and close): its "
+                   "'launch' velocities and gains are the "
                    "velocities at t_max, no e_eff is measured, and the rigid comparison does not apply")
     if np.isfinite(sol.energy_error) and sol.energy_error > ENERGY_WARN:
         out.append(f"energy audit: |E(t) - E(0)| reached {sol.energy_error:.2e} of the drop energy "

@@ -399,16 +399,20 @@ def sweep(
     left = plan.size if not output.exists() else plan.size - sum(
         (plan.region(c).stop - plan.region(c).start) * plan.row for c in _done(output))
     rate = recorded_rate(plan, workers, scheduler)
-    if rate:  # before anything runs: the steady rate of the last sweep of this structure here
-        typer.echo(f"hertz-chain: sweep: about {left / rate:.0f} s for {plural(left, 'design')} at "
-                   f"{rate:,.0f} designs/s (the last sweep of this structure on this machine), plus compilation",
-                   err=True)
-    else:
+    if left == 0:
+        typer.echo("hertz-chain: sweep: every chunk is done already: nothing to run", err=True)
+    elif rate:  # before anything runs: the steady rate of the last sweep of this structure here
+        typer.echo(f"hertz-chain: sweep: about {left / rate:.2g} s for {plural(left, 'design')} at "
+                   f"{rate:,.0f} designs/s (the last sweep of this structure on this machine), plus the first "
+                   "chunk's compilation", err=True)
+    elif plan.n_chunks > 1:
         typer.echo("hertz-chain: sweep: no earlier sweep of this structure here to time it by: an estimate "
                    "follows the first chunk", err=True)
+    else:  # one chunk: no steady rate to record either (the first chunk includes the compilation)
+        typer.echo("hertz-chain: sweep: one chunk: no time estimate", err=True)
 
-    def estimate(done, todo, seconds):  # once, after the first chunk (the progress bar has an ETA on a terminal)
-        if done == 1 and todo > 1 and not sys.stderr.isatty():
+    def estimate(done, todo, seconds):  # once, after the first chunk, when no recorded rate was printed
+        if done == 1 and todo > 1 and not rate and not sys.stderr.isatty():
             typer.echo(f"hertz-chain: sweep: first chunk in {seconds:.1f} s (with compilation); about "
                        f"{seconds * (todo - 1):.0f} s or less for the other {todo - 1}", err=True)
 
@@ -425,7 +429,8 @@ def sweep(
     else:
         rate = f", {summary['designs_per_second']:.3g} designs/s" if result.computed else ""
         counts = ", ".join(f"{k} {v}" for k, v in result.status_counts.items())
-        typer.echo(f"{result.path}: {result.designs} designs; {result.computed} chunks computed, {result.skipped} "
+        chunks = f"{result.computed} chunk{'' if result.computed == 1 else 's'}"
+        typer.echo(f"{result.path}: {result.designs} designs; {chunks} computed, {result.skipped} "
                    f"already done{rate}; status: {counts}")
 
 

@@ -207,11 +207,13 @@ def summary_table(report: Report, title: str | None = None) -> str:
         right = f"{label:<10} {_fmt(e_nom, '.4f'):>9}  {_fmt(e_eff, '.4f'):>7}  {count:>4}" if j >= first else \
             "(no ground: mass 1 has no interface below it)"
         lines.append(f"{i + 1:>4}  {_fmt(float(gain), '.4f'):>7}  | {right}")
-    lines.append("  gain: the mass's velocity at t_max (upward > 0) over the striker speed" if held else
-                 f"  gain: the mass's launch velocity (when its last push of the first cascade ended; upward > 0) over "
+    # "up" is away from mass 1: toward the lighter end of a horizontal chain (no ground or no gravity)
+    up = "upward > 0" if r.ground and float(r.solution.stack.gravity) > 0 else "> 0 away from mass 1"
+    lines.append(f"  gain: the mass's velocity at t_max ({up}) over the striker speed" if held else
+                 f"  gain: the mass's launch velocity (when its last push of the first cascade ended; {up}) over "
                  f"the {speed}")
     lines.append("  e_eff: separation over approach speed of the interface's main contact; episodes: its contacts "
-                 "in the first cascade")
+                 + ("up to t_max" if held else "in the first cascade"))
     lines.append("")
     top = r.top_pulse
     if top is not None:

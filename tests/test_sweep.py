@@ -356,7 +356,10 @@ def test_time_estimate_before_the_run_from_the_last_sweep_of_the_same_structure(
     assert rate is not None and np.isfinite(rate) and rate > 0
     res = CliRunner().invoke(app, ["sweep", str(path), "--output", str(tmp_path / "b.zarr")])
     assert res.exit_code == 0, res.output
-    assert f"about {6 / rate:.0f} s for 6 designs at {rate:,.0f} designs/s" in res.stderr
+    assert f"about {6 / rate:.2g} s for 6 designs at {rate:,.0f} designs/s" in res.stderr
+    assert "first chunk in" not in res.stderr  # no second, compile-laden estimate after the first chunk
+    res = CliRunner().invoke(app, ["sweep", str(path), "--output", str(tmp_path / "b.zarr"), "--resume"])
+    assert res.exit_code == 0 and "every chunk is done already" in res.stderr and "0 chunks computed" in res.stdout
     # another structure (four masses) has no record
     other = tmp_path / "other.toml"
     other.write_text(tomli_w.dumps(BASE | {"stack": BASE["stack"] | {"masses": [1.0, 0.5, 0.3, 0.1]},
