@@ -27,7 +27,9 @@ def report_figure(report: Report):
     ax = axes[0, 0]
     for i in range(n):
         ax.plot(t_ms, st.velocities[:, i], label=f"mass {i + 1}")
-    ax.set(xlabel="time (ms)", ylabel="velocity (m/s, upward)", title="Velocities")
+    vertical = report.ground and float(report.solution.stack.gravity) > 0  # else "up" is away from mass 1
+    ax.set(xlabel="time (ms)", ylabel=f"velocity (m/s, {'upward' if vertical else '> 0 away from mass 1'})",
+           title="Velocities")
     ax.legend(fontsize="small", ncol=2)
     ax = axes[0, 1]
     for j in range(0 if report.ground else 1, n):

@@ -181,7 +181,8 @@ def summary_table(report: Report, title: str | None = None) -> str:
                  f"({', '.join(f'{m:.4g}' for m in r.masses)} kg)")
     lines.append("")
     lines.append("top-mass velocity at t_max over the striker speed (a held chain has no launch)" if held
-                 else "top-mass velocity gain G_n = V_n / v_ff")
+                 else "top-mass velocity gain G_n = V_n / v_ff" if speed == "drop speed"
+                 else "top-mass velocity gain G_n = V_n / v_0 (v_0 the striker speed)")
     lines.append(f"  {model_label(r):<40}{_fmt(r.top_velocity_gain)}")
     if not held:  # no rigid cascade for a chain that never flies apart (its note says so)
         lines.append(f"  rigid, Eq 19 with nominal e             {_fmt(r.rigid.nominal_gain)}"

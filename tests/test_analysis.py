@@ -124,6 +124,15 @@ def test_horizontal_chain_follows_eq13():
     assert r.top_velocity_gain == pytest.approx(g13, rel=1e-6)
     assert r.rigid.nominal_gain == pytest.approx(g13, rel=1e-12)
     assert r.regime == "independent"
+    # no ground, no gravity: the text and the figure speak of a striker and of "away from mass 1", not of a
+    # drop, a free fall or "upward"
+    from hertz_chain.plot import report_figure
+    from hertz_chain.report import summary_table
+
+    text = summary_table(r)
+    assert "striker speed 1 m/s" in text and "v_0 the striker speed" in text and "> 0 away from mass 1" in text
+    assert "drop speed" not in text and "upward" not in text and "v_ff" not in text
+    assert report_figure(r).axes[0].get_ylabel() == "velocity (m/s, > 0 away from mass 1)"
 
 
 def test_independence_measure_on_known_intervals():
