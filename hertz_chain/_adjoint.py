@@ -15,6 +15,180 @@ from ._solver import _SolveConfig
 from ._tracking import T_IN, T_OUT
 
 # ==================================================================== reverse mode: replay the accepted steps
+# Onsets and releases in the replay (`_Replay`; docs/gradients.md). Where a contact closes inside a step,
+# the replay splits the step `_ONSET_OVERLAP` (in units of the overlap scale) either side of the onset: far
+# above the rounding of an overlap (~1e-13), far below anything the motion resolves. Within `_ONSET_WINDOW`
+# (units of the contact time T) after the latest onset `t*`, steps are replayed in
+# `s = (t - t*)^(1/_ONSET_POWER)`, each as `_ONSET_SUBSTEPS` solver steps: a damped law's force rises as
+# `delta^(1/4)` (Tsuji) or `delta^(1/2)` from the onset, so the motion and its sensitivity are singular in
+# `t` there but power series in `s`, and the forward solve's steps, chosen for the motion, are too coarse
+# for the sensitivity there. Where a clamped contact's unclamped force changes sign while it overlaps (the
+# kink of its force), the step is split where it is zero.
+_ONSET_OVERLAP = 1e-11
+_ONSET_POWER = 4
+_ONSET_WINDOW = 1e-3
+_ONSET_SUBSTEPS = 4
+_ONSET_MIN_RATE = 1e-3  # in units of the velocity scale (scaled overlap per scaled time)
+
+
+def _s_field(s, y, args):
+    """The scaled vector field in `s = (t - t*)^(1/p)`: `dy/ds = p s^(p-1) f(t* + s^p, y)`."""
+    field_args, t_star = args
+    p = _ONSET_POWER
+    return p * s ** (p - 1) * _scaled_field(t_star + s**p, y, field_args)
+
+
+class _Replay(eqx.Module):
+    """One accepted step of the forward solve, replayed as a differentiable map of the design, the state
+    and the latest onset time `t*` (scaled; `-inf` before the first onset): `(y, t*) -> (y', t*')`.
+    Four kinds of step (`vjp`), chosen from the forward solve's states at the step's ends:
+
+    - plain: the solver's step, as diffrax's discrete adjoint replays it;
+    - within `_ONSET_WINDOW` of the latest onset: `_ONSET_SUBSTEPS` solver steps in
+      `s = (t - t*)^(1/4)` (`in_s`);
+    - an onset (a contact open at the step's start and closed at its end, approaching faster than
+      `_ONSET_MIN_RATE`): three pieces that each see the contact in one state, so that the discrete
+      derivative is that of the motion with its onset (a force that jumps or rises steeply where the
+      contact closes; the saltation of the sensitivity):
+      1. the solver's step to where the overlap is `-_ONSET_OVERLAP` (none if the step starts closer to
+         the onset than that), predicted linearly from the overlap and its rate at the step's start (the
+         onset proxy keeps such steps short, ~1e-7 T, so the prediction is off by ~1e-14, far below
+         `_ONSET_OVERLAP`); it moves with the design;
+      2. an Euler step with the derivative at its start (open) to `+_ONSET_OVERLAP`: the overlap is linear
+         in the positions, so it lands there exactly; its length, `2 _ONSET_OVERLAP` over the closing
+         speed, is ~1e-11 T; the onset `t*'` (overlap 0) is on it;
+      3. the rest of the step in `s = (t - t*')^(1/4)` (every stage sees the contact closed);
+      only the first contact to close in a step is split out (two onsets in one accepted step are rare);
+    - a release (a clamped contact's unclamped force changes sign while it overlaps: the kink of its
+      force at `F = 0`): two solver steps that meet where that force is zero, found by one secant step
+      from the linear guess (its derivative is the implicit function theorem's).
+    """
+
+    stack_static: object
+    scale: jax.Array
+    T: jax.Array
+    solver: object
+    mask: jax.Array
+    clamped: jax.Array
+    n: int = eqx.field(static=True)
+    ground: bool = eqx.field(static=True)
+
+    def _args(self, dyn):
+        return FieldArgs(eqx.combine(dyn, self.stack_static), self.scale, self.T)
+
+    def _overlaps(self, y):
+        """Scaled overlaps (in units of the overlap scale, the positions' scale) of a scaled state, or
+        their rates from a scaled derivative (`Stack.overlaps`: linear in the positions)."""
+        x = y[: self.n]
+        d0 = -x[:1] if self.ground else jnp.zeros_like(x[:1])
+        return jnp.concatenate([d0, x[:-1] - x[1:]])
+
+    def _solver_step(self, term, y, a, b, args):
+        return self.solver.step(term, a, b, y, args, self.solver.init(term, a, b, y, args), False)[0]
+
+    def in_s(self, dyn, y, sa, sb, t_star):
+        """`_ONSET_SUBSTEPS` solver steps in `s` from `sa` to `sb` (`_s_field`)."""
+        args, term = (self._args(dyn), t_star), dfx.ODETerm(_s_field)
+        ds = (sb - sa) / _ONSET_SUBSTEPS
+        return jax.lax.fori_loop(0, _ONSET_SUBSTEPS,
+                                 lambda i, y: self._solver_step(term, y, sa + i * ds, sa + (i + 1) * ds, args), y)
+
+    def approach(self, dyn, y, t):
+        """Every interface's scaled overlap and its rate at a state (`(2, n)`)."""
+        return jnp.stack([self._overlaps(y), self._overlaps(_scaled_field(t, y, self._args(dyn)))])
+
+    def onset(self, dyn, y0, t0, t1, t_star, j):
+        """The step `t0 -> t1` in which contact `j` closes: `(y', t*')` (class docstring)."""
+        eps, h = _ONSET_OVERLAP, t1 - t0
+        d0, rate0 = self.approach(dyn, y0, t0)[:, j]
+        tau_a = jnp.where(d0 < -eps, jnp.clip((-eps - d0) / jnp.where(rate0 > 0, rate0, 1.0), 0.0, h), 0.0)
+        ya = self._solver_step(dfx.ODETerm(_scaled_field), y0, t0, t0 + tau_a, self._args(dyn))
+        f = _scaled_field(t0 + tau_a, ya, self._args(dyn))
+        rate = self._overlaps(f)[j]  # the closing interface's scaled overlap rate (> 0)
+        rate = jnp.where(rate > 0, rate, 1.0)
+        da = self._overlaps(ya)[j]
+        tau_star = tau_a - da / rate  # the onset, from t0
+        tau_b = jnp.minimum(tau_a + (eps - da) / rate, h)
+        yb = ya + (tau_b - tau_a) * f
+        sa = jnp.maximum(tau_b - tau_star, 0.0) ** (1.0 / _ONSET_POWER)
+        sb = jnp.maximum(h - tau_star, 0.0) ** (1.0 / _ONSET_POWER)
+        new_star = t0 + tau_star
+        return self.in_s(dyn, yb, sa, sb, new_star), new_star
+
+    def closing(self, y0, y1, h):
+        """Whether a contact closes between two accepted states of the forward solve `h` apart (open at
+        the first, closed at the second, approaching at more than `_ONSET_MIN_RATE`: a gentler closing
+        is smooth enough for the plain step) and the first to close, by a linear guess."""
+        d0, d1 = self._overlaps(y0), self._overlaps(y1)
+        closes = self.mask & (d0 <= 0) & (d1 > 0) & (d1 - d0 > _ONSET_MIN_RATE * h)
+        frac = jnp.where(closes, d0 / jnp.where(closes, d0 - d1, 1.0), jnp.inf)
+        return jnp.any(closes), jnp.argmin(frac)
+
+    def onset_times(self, dyn, ts, ys, N):
+        """`(len(ts),)` the latest onset time at the start of every step `k = 1..N` of a history (`-inf`
+        before the first), without gradients: the primal `t*` the reverse sweep linearises at (`onset`'s
+        prediction from the step's start: the same to third order in the step)."""
+
+        def at(k, t_star):
+            closes, j = self.closing(ys[k - 1], ys[k], ts[k] - ts[k - 1])
+
+            def onset(_):
+                d, rate = self.approach(dyn, ys[k - 1], ts[k - 1])[:, j]
+                return ts[k - 1] + jnp.where(d < 0, -d / jnp.where(rate > 0, rate, 1.0), 0.0)
+
+            return jax.lax.cond(closes, onset, lambda _: t_star, None)
+
+        def body(k, carry):
+            t_star, table = carry
+            return at(k, t_star), table.at[k].set(t_star)
+
+        dyn = jax.lax.stop_gradient(dyn)
+        return jax.lax.fori_loop(1, N + 1, body, (-jnp.inf, jnp.full(ts.shape, -jnp.inf)))[1]
+
+    def vjp(self, cotangents, dyn, y0, t_star, y1_forward, t0, t1):
+        """The step's vector-Jacobian product: `cotangents = (lambda_y, lambda_t*)` of `(y', t*')` to those
+        of `(dyn, y0, t*)`. The kind of step (class docstring) is chosen outside the differentiation, so a
+        plain step costs what it did before onsets were treated."""
+        closes, j = self.closing(y0, y1_forward, t1 - t0)
+        window = jnp.isfinite(t_star) & (t0 - t_star < _ONSET_WINDOW)
+
+        def plain(d, y, ts):
+            return self._solver_step(dfx.ODETerm(_scaled_field), y, t0, t1, self._args(d)), ts
+
+        def in_window(d, y, ts):
+            sa, sb = (jnp.maximum(t - ts, 0.0) ** (1.0 / _ONSET_POWER) for t in (t0, t1))
+            return self.in_s(d, y, sa, sb, ts), ts
+
+        def onset(d, y, ts):
+            return self.onset(d, y, t0, t1, ts, j)
+
+        f0, f1 = self.unclamped(dyn, y0), self.unclamped(dyn, y1_forward)
+        d0, d1 = self._overlaps(y0), self._overlaps(y1_forward)
+        kink = self.mask & self.clamped & (d0 > 0) & (d1 > 0) & (jnp.sign(f0) * jnp.sign(f1) < 0)
+        kinks, jr = jnp.any(kink), jnp.argmax(kink)
+        def release(d, y, ts):
+            # split where the unclamped force is zero (the clamp's kink): from the linear guess, one secant
+            # step through the sub-step, whose derivative is the implicit function theorem's (the slope
+            # is the step's, `f1 - f0`, without gradient)
+            term, args, h = dfx.ODETerm(_scaled_field), self._args(d), t1 - t0
+            slope = jax.lax.stop_gradient(f1[jr] - f0[jr])
+            th0 = jax.lax.stop_gradient(jnp.clip(f0[jr] / -slope, 0.0, 1.0))
+            th = th0 - self.unclamped(d, self._solver_step(term, y, t0, t0 + th0 * h, args))[jr] / slope
+            ta = t0 + jnp.clip(th, 0.0, 1.0) * h
+            return self._solver_step(term, self._solver_step(term, y, t0, ta, args), ta, t1, args), ts
+
+        kind = jnp.where(closes, 2, jnp.where(window, 1, jnp.where(kinks, 3, 0)))
+        return jax.lax.switch(kind, [lambda fn=fn: jax.vjp(fn, dyn, y0, t_star)[1](cotangents)
+                                     for fn in (plain, in_window, onset, release)])
+
+    def unclamped(self, dyn, y):
+        """Every interface's unclamped force (`Stack.unclamped_forces`, N) at a scaled state."""
+        stack = eqx.combine(dyn, self.stack_static)
+        Y = y * self.scale
+        x, v, _ = stack.split(Y)
+        return stack.unclamped_forces(stack.overlaps(x), stack.overlap_rates(v), stack.memory(Y))
+
+
 @eqx.filter_custom_vjp
 def _replayed_solve(diff, t1s, scale, T, cfg: _SolveConfig) -> dict:
     """`_solve_record` of the solve from `diff = (stack, y0s)`, differentiable in reverse mode by a discrete
@@ -66,22 +240,20 @@ def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _SolveConfig)
         (ct_Y,) = vjp((rows_ct[:, 2], rows_ct[:, 3], rows_ct[:, 4], rows_ct[:, 5]))
         ct_hist = ct_hist.at[idx].add(jnp.where(valid[:, None], ct_Y, 0.0))
     dyn, static = eqx.partition(stack, eqx.is_inexact_array)
-    terms, solver = dfx.ODETerm(_scaled_field), cfg.solver
-
-    def step(dyn, y, t0, t1):
-        args = FieldArgs(eqx.combine(dyn, static), scale, T)
-        return solver.step(terms, t0, t1, y, args, solver.init(terms, t0, t1, y, args), False)[0]
-
+    replay = _Replay(static, scale, T, cfg.solver, stack.interface_mask(), jnp.asarray(stack.clamped()), stack.n,
+                     bool(stack.ground))
     # The onset proxies (`resolve_onsets`, entries state_size:) feed nothing back into the motion and no output
     # depends on them: replay the physical equations only (the same arithmetic, component by component).
-    ct_hist = ct_hist[:, :n3]
+    ct_hist, ys = ct_hist[:, :n3], hist_y[:, :n3]
+
+    star_table = replay.onset_times(dyn, hist_t, ys, N)
 
     def body(i, carry):
-        lam, acc = carry
+        lam, lam_star, acc = carry
         k = N - i
-        _, vjp = jax.vjp(lambda d, y: step(d, y, hist_t[k - 1], hist_t[k]), dyn, hist_y[k - 1, :n3])
-        g_dyn, g_y = vjp(lam)
-        return g_y + ct_hist[k - 1], jax.tree.map(jnp.add, acc, g_dyn)
+        g_dyn, g_y, g_star = replay.vjp((lam, lam_star), dyn, ys[k - 1], star_table[k], ys[k], hist_t[k - 1],
+                                        hist_t[k])
+        return g_y + ct_hist[k - 1], g_star, jax.tree.map(jnp.add, acc, g_dyn)
 
-    lam, acc = jax.lax.fori_loop(0, N, body, (ct_hist[N], jax.tree.map(jnp.zeros_like, dyn)))
+    lam, _, acc = jax.lax.fori_loop(0, N, body, (ct_hist[N], jnp.zeros(()), jax.tree.map(jnp.zeros_like, dyn)))
     return acc, jnp.zeros_like(y0s).at[:n3].set(lam)

@@ -88,25 +88,31 @@ def test_a_law_with_memory_is_refused_in_one_line():
         DesignMap(spec, resolve("stack.masses", [2], n=3, ground=True))
 
 
-@pytest.mark.parametrize("law", ["hertz", "hunt-crossley"])
+@pytest.mark.parametrize("law", ["hertz", "hunt-crossley", "tsuji", "kelvin-voigt", "viscoelastic"])
 def test_design_gradient_matches_central_differences(law):
     """d(top launch velocity)/d(middle mass, top stiffness, restitution) under gravity with gaps,
-    reverse mode through the design map, against central differences (step 1e-5 relative), to the
-    issue's 1e-5."""
+    reverse mode through the design map, against central differences (step 1e-4 relative), to the
+    issue's 1e-5, for every law of the issue: the damped laws' onsets (a force that rises as
+    delta^(1/4) or sqrt(delta), or jumps) and releases (the clamp's kink) are split out of the replayed
+    steps (`hertz_chain._adjoint._Replay`; before, Tsuji was 0.4 off and Kelvin-Voigt 12)."""
     spec = parse_stack(_stack_doc(law))
     slots = resolve("stack.masses", [2], n=3, ground=True) + resolve("contact.stiffness", [2], n=3, ground=True)
-    if law == "hunt-crossley":
+    if law != "hertz":
         slots += resolve("contact.restitution", [1], n=3, ground=True)
     dm = DesignMap(spec, slots)
-    f = jax.jit(lambda x: hc.launch_velocity(*dm(x))[-1])
+    f = jax.jit(lambda x: hc.launch_velocity(*dm(x))[-1])  # the default tolerances (1e-11)
+    # the reference: central differences of solves at 1e-13 (their error ~1e-12 over a step of 1e-4
+    # relative: ~1e-8; truncation ~1e-8; differences of the default solves would carry the damped laws'
+    # error tail, ~1e-11 / 1e-5 = 1e-6 absolute, and worse)
+    ref = jax.jit(lambda x: hc.launch_velocity(*dm(x), tolerances=hc.Tolerances(rtol=1e-13, atol=1e-13))[-1])
     x0 = dm.values()
     grad = np.asarray(jax.grad(f)(jnp.asarray(x0)))
     for i in range(len(x0)):
-        h = 1e-5 * x0[i]
+        h = 1e-4 * x0[i]
         up, down = x0.copy(), x0.copy()
         up[i] += h
         down[i] -= h
-        fd = (float(f(up)) - float(f(down))) / (2 * h)
+        fd = (float(ref(up)) - float(ref(down))) / (2 * h)
         assert grad[i] == pytest.approx(fd, rel=1e-5), (slots[i].label, grad[i], fd)
 
 
