@@ -552,7 +552,7 @@ def markdown(data: dict) -> str:
               "`jax.jit` of the top launch velocity as a function of the masses; grad: `jax.jit(jax.grad(...))` "
               "(reverse mode, `launch_velocity`'s replayed discrete adjoint); diffrax grad: the same with "
               "`adjoint=diffrax.RecursiveCheckpointAdjoint(checkpoints=max_steps)` (reverse mode through the solver "
-              "loop); rev vs diffrax: max |difference| / max |diffrax gradient| (the same discrete derivative); "
+              "loop); rev vs diffrax: max |difference| / max |diffrax gradient| (the same discrete derivative until 2026-11-26; since then the replay splits contact onsets and releases out of its steps, so they differ by diffrax's error at onsets); "
               "jacfwd: `adjoint=\"forward\"` with `jax.jacfwd`. "
               "rev vs fwd, rev / fwd vs FD: max |difference| / max |FD gradient|, FD = central differences "
               "(h = 1e-4 m_i) of a reference solve at rtol = atol = 1e-13. The solver controls the error of the "

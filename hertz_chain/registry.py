@@ -33,11 +33,11 @@ class LawRow:
       dimension (a `stackfile` dimension name), its largest value, and how messages describe it;
       `aliases`: the other keywords `make_law` accepts for it.
     - `smooth_onset`: its force and the force's derivatives stay bounded as a contact closes (no
-      `delta^(1/4)` or `sqrt(delta)` factor on the rate, no jump of a linear dashpot), so that reverse
-      mode over the solver's accepted steps (`simulate.launch_velocity`) differentiates a gapped stack
-      accurately (1e-5 against central differences, `tests/test_optimize.py`); for the other laws it
-      does not (errors of order 1 with gaps), and `hertz_chain.optimization` uses batched central
-      differences instead.
+      `delta^(1/4)` or `sqrt(delta)` factor on the rate, no jump of a linear dashpot). Reverse mode
+      (`simulation.launch_velocity`) differentiates every law accurately since onsets are split out of
+      the replayed steps (2e-6 against central differences with gaps, `tests/test_optimize.py`); forward
+      mode and diffrax's adjoints do not for the other laws (errors of order 1 with gaps), and
+      `hertz_chain.optimization` still uses batched central differences for them.
     - `speed_dependent`: its restitution changes with the impact speed, so calibrating it to a
       restitution needs a `calibration_velocity`; `needs_effective_mass`: calibrating it (or the law
       itself) needs the interface's effective mass; `chi_map`: it takes a `CHI_MAPS` entry.
