@@ -142,7 +142,8 @@ def _fmt(x, spec=".4f"):
 def _err(rigid, sim):
     if rigid is None or sim is None or not (math.isfinite(rigid) and math.isfinite(sim)) or sim <= 0:
         return ""  # no comparison with an undefined or non-positive (partial) gain
-    return f"  ({(rigid - sim) / sim:+.2%} vs compliant)"
+    rel = (rigid - sim) / sim
+    return f"  ({0.0 if abs(rel) < 5e-5 else rel:+.2%} vs compliant)"  # never "-0.00%"
 
 
 def model_label(report: Report) -> str:
@@ -229,7 +230,7 @@ def summary_table(report: Report, title: str | None = None) -> str:
         value = f"{s_.maximax[k]:,.0f} g" if s_.kind == "acceleration" else f"{s_.maximax[k]:.4g} m/s"
         lines.append(f"top SRS (Q = {s_.Q:g}{what}): max {value} at {s_.frequencies_Hz[k]:,.0f} Hz")
     lines.append(f"regime: {r.regime} (neighbouring contacts overlap {r.independence:.1%} of the "
-                 "shorter contact time; the rigid theory assumes 0%)")
+                 "shorter contact time" + (")" if held else "; the rigid theory assumes 0%)"))
     if np.isfinite(r.wall_peak_force):
         lines.append(f"far wall: peak force {r.wall_peak_force:,.6g} N on the top mass")
     if np.isfinite(r.wave_speed):
