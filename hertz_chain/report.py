@@ -139,11 +139,15 @@ def _fmt(x, spec=".4f"):
     return "—" if not math.isfinite(x) else format(x, spec)
 
 
+def signed_percent(rel: float) -> str:
+    """`rel` as a signed percentage to two decimals, `+0.00%` (never `-0.00%`) where it rounds to zero."""
+    return f"{0.0 if abs(rel) < 5e-5 else rel:+.2%}"
+
+
 def _err(rigid, sim):
     if rigid is None or sim is None or not (math.isfinite(rigid) and math.isfinite(sim)) or sim <= 0:
         return ""  # no comparison with an undefined or non-positive (partial) gain
-    rel = (rigid - sim) / sim
-    return f"  ({0.0 if abs(rel) < 5e-5 else rel:+.2%} vs compliant)"  # never "-0.00%"
+    return f"  ({signed_percent((rigid - sim) / sim)} vs compliant)"
 
 
 def model_label(report: Report) -> str:

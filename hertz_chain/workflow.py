@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .report import model_label, summary_table
+from .report import model_label, signed_percent, summary_table
 from .stackfile import StackSpec, load_stack_file
 
 if TYPE_CHECKING:  # the simulator stack (JAX) is imported only when a simulation runs
@@ -88,8 +88,8 @@ def demo() -> str:
     rigid = g.rigid.nominal_gain
     out.append("Summary: rigid theory (paper Eq 20/19) predicts G = "
                f"{rigid:.4f} for this stack.")
-    out.append(f"  gapped  : {model_label(g)} G = {g.top_velocity_gain:.4f} ({(g.top_velocity_gain - rigid) / rigid:+.2%}), "
+    out.append(f"  gapped  : {model_label(g)} G = {g.top_velocity_gain:.4f} ({signed_percent((g.top_velocity_gain - rigid) / rigid)}), "
                f"regime {g.regime}")
-    out.append(f"  touching: {model_label(t)} G = {t.top_velocity_gain:.4f} ({(t.top_velocity_gain - rigid) / rigid:+.2%}), "
+    out.append(f"  touching: {model_label(t)} G = {t.top_velocity_gain:.4f} ({signed_percent((t.top_velocity_gain - rigid) / rigid)}), "
                f"regime {t.regime}: a touching stack gets far less than the theory promises")
     return "\n".join(out)

@@ -239,8 +239,9 @@ def test_top_srs_options_pseudo_velocity_against_scipy_and_pyyeti():
 def test_a_rigid_line_equal_to_the_compliant_gain_reads_plus_zero():
     # Reference: (rigid - sim) / sim of equal gains is 0 exactly, and 1e-6 rounds to 0.00 %: the line reads
     # "+0.00%", never "-0.00%"; a real difference keeps its sign
-    from hertz_chain.report import _err
+    from hertz_chain.report import _err, signed_percent
 
+    assert signed_percent(-1e-6) == "+0.00%" and signed_percent(-0.5209) == "-52.09%"  # the demo's summary
     assert _err(2.0, 2.0) == "  (+0.00% vs compliant)"
     assert _err(2.0 * (1 - 1e-6), 2.0) == "  (+0.00% vs compliant)"
     assert _err(1.9, 2.0) == "  (-5.00% vs compliant)"
