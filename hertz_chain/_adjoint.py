@@ -216,10 +216,12 @@ def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _SolveConfig)
     """Reverse sweep over the accepted steps `y_k = Phi(y_{k-1}; t_{k-1}, t_k, stack)`: with the step
     times frozen (as diffrax's controller does in reverse mode: it stops gradients through the step size),
     `lambda_{k-1} = (dPhi/dy)^T lambda_k + (cotangent of y_{k-1})` and `stack_bar += (dPhi/dstack)^T
-    lambda_k`, each step's vector-Jacobian product by `jax.vjp` of the solver's own step. The outputs
-    that depend on the state are the final state and, per interface, the overlap, its rate and the two
-    bodies' velocities at the first
-    accepted point after the last contact (`_Contacts.rows`); the step times carry no gradient."""
+    lambda_k`, each step's vector-Jacobian product by `jax.vjp` of its replay (`_Replay`: the solver's
+    own step, or, where a contact closes or a clamped contact lets go inside it or an onset is recent, the
+    step in pieces that see how those move; the latest onset time `t*` is carried with `lambda`). The
+    outputs that depend on the state are the final state and, per interface, the overlap, its rate and
+    the two bodies' velocities at the first accepted point after the last contact (`_Contacts.rows`);
+    the step times carry no gradient."""
     del perturbed
     hist_t, hist_y, idx, valid = residuals
     stack, y0s = diff
