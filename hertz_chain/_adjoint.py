@@ -15,7 +15,7 @@ from ._solver import _SolveConfig
 from ._tracking import T_IN, T_OUT
 
 # ==================================================================== reverse mode: replay the accepted steps
-# Onsets and releases in the replay (`_Replay`; docs/gradients.md). Where a contact closes inside a step,
+# Onsets and releases in the replay (`_Replay`; docs/solver-defaults.md, "Onsets and releases in the replay"). Where a contact closes inside a step,
 # the replay splits the step `_ONSET_OVERLAP` (in units of the overlap scale) either side of the onset: far
 # above the rounding of an overlap (~1e-13), far below anything the motion resolves. Within `_ONSET_WINDOW`
 # (units of the contact time T) after the latest onset `t*`, steps are replayed in
@@ -71,7 +71,6 @@ class _Replay(eqx.Module):
     mask: jax.Array
     clamped: jax.Array
     n: int = eqx.field(static=True)
-    ground: bool = eqx.field(static=True)
 
     def _args(self, dyn):
         return FieldArgs(eqx.combine(dyn, self.stack_static), self.scale, self.T)
@@ -79,9 +78,7 @@ class _Replay(eqx.Module):
     def _overlaps(self, y):
         """Scaled overlaps (in units of the overlap scale, the positions' scale) of a scaled state, or
         their rates from a scaled derivative (`Stack.overlaps`: linear in the positions)."""
-        x = y[: self.n]
-        d0 = -x[:1] if self.ground else jnp.zeros_like(x[:1])
-        return jnp.concatenate([d0, x[:-1] - x[1:]])
+        return self.stack_static.overlaps(y[: self.n])
 
     def _solver_step(self, term, y, a, b, args):
         return self.solver.step(term, a, b, y, args, self.solver.init(term, a, b, y, args), False)[0]
@@ -166,6 +163,7 @@ class _Replay(eqx.Module):
         d0, d1 = self._overlaps(y0), self._overlaps(y1_forward)
         kink = self.mask & self.clamped & (d0 > 0) & (d1 > 0) & (jnp.sign(f0) * jnp.sign(f1) < 0)
         kinks, jr = jnp.any(kink), jnp.argmax(kink)
+
         def release(d, y, ts):
             # split where the unclamped force is zero (the clamp's kink): from the linear guess, one secant
             # step through the sub-step, whose derivative is the implicit function theorem's (the slope
@@ -242,8 +240,7 @@ def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _SolveConfig)
         (ct_Y,) = vjp((rows_ct[:, 2], rows_ct[:, 3], rows_ct[:, 4], rows_ct[:, 5]))
         ct_hist = ct_hist.at[idx].add(jnp.where(valid[:, None], ct_Y, 0.0))
     dyn, static = eqx.partition(stack, eqx.is_inexact_array)
-    replay = _Replay(static, scale, T, cfg.solver, stack.interface_mask(), jnp.asarray(stack.clamped()), stack.n,
-                     bool(stack.ground))
+    replay = _Replay(static, scale, T, cfg.solver, stack.interface_mask(), jnp.asarray(stack.clamped()), stack.n)
     # The onset proxies (`resolve_onsets`, entries state_size:) feed nothing back into the motion and no output
     # depends on them: replay the physical equations only (the same arithmetic, component by component).
     ct_hist, ys = ct_hist[:, :n3], hist_y[:, :n3]
