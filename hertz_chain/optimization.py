@@ -28,6 +28,10 @@ masses is optimised from masses spaced geometrically between the file's end mass
 - *Global*: a scrambled Sobol pre-screen (`scipy.stats.qmc`, seeded) of `screen` designs evaluated in
   one compiled, vmapped `simulate_batch`; the best `starts - 1` of them and the file's own stack start
   the local searches. The result says whether the starts agree.
+- *Starts in lockstep*: with batched central differences, the local searches run together, one scipy
+  search per start in its own thread, and every round of their objective calls is one batched
+  `simulate_batch` of all their stencils (`_searches`). The reverse mode takes one design at a time
+  (under `vmap` its replay runs every kind of step for every step), so its starts run one by one.
 
 Raises `StackFileError` (one line naming the key, the value and what is allowed) for a bad
 `[optimize]` section: an unknown key to vary, an index out of range, bounds in the wrong order or units,
@@ -369,9 +373,14 @@ def _objective(p: OptimizeSpec, mt: dict) -> float:
 
 
 class _Evaluator:
-    """The objective and constraints of one `_Space`, compiled once and reused for every start."""
+    """The objective and constraints of one `_Space`, compiled once and reused for every start.
 
-    def __init__(self, space: _Space, problem: OptimizeSpec):
+    `width`: how many designs one batched evaluation takes at most (the number of local searches run
+    in lockstep, `_searches`; 1 for the reverse mode). The central differences pad a batch of `k`
+    designs to the next power of two (at most `width`) by repeating the first: at most
+    `log2(width) + 1` compiled shapes, and little work wasted as the searches finish one by one."""
+
+    def __init__(self, space: _Space, problem: OptimizeSpec, width: int = 1):
         import jax
 
         self.space, self.problem = space, problem
@@ -382,6 +391,10 @@ class _Evaluator:
 
         self.gradient = ("reverse mode" if all(LAWS[cs.law].smooth_onset for cs in space.dm.contacts.values())
                          else "batched central differences")
+        # the reverse mode takes one design at a time: under `vmap` the replay's `lax.switch` between its
+        # kinds of step becomes a select that runs all four for every step (measured: the six-mass search
+        # of benchmarks/optimize.md took 187 s with its eight starts vmapped, against ~30 s)
+        self.width = max(int(width), 1) if self.gradient != "reverse mode" else 1
         if not problem.needs_pulse and self.gradient == "reverse mode":
             from .simulation import launch_velocity
 
@@ -390,7 +403,8 @@ class _Evaluator:
                 stack, state = space.dm(x)
                 return -launch_velocity(stack, state, until="launch")[-1] / space.dm.drop_speed(x)
 
-            self._vg = jax.jit(jax.value_and_grad(neg_gain))
+            one = jax.jit(jax.value_and_grad(neg_gain))
+            self._vg = lambda U: jax.tree.map(lambda a: a[None], one(U[0]))
         elif not problem.needs_pulse:
             self._vg = self._central_differences
         self._mass = jax.jit(jax.value_and_grad(lambda u: self._total_mass(u)))
@@ -401,46 +415,67 @@ class _Evaluator:
     #: (truncation O(h^2) stays below that)
     FD_STEP = 1e-3
 
-    def _central_differences(self, u):
-        """The negative gain at `u` and its central-difference gradient, the 2d + 1 designs in one
-        compiled, vmapped solve (`simulate_batch`); the stencil is kept inside the box."""
+    def _central_differences(self, U):
+        """The negative gains at the rows of `U` `(k, d)` and their central-difference gradients:
+        the `k (2d + 1)` designs in one compiled, batched solve (`simulate_batch`); each stencil is
+        kept inside the box. A row whose stencil did not complete gets NaN."""
         import jax
         import jax.numpy as jnp
 
         from .simulation import Tolerances, simulate_batch
 
-        d, h = len(u), self.FD_STEP
-        c = np.clip(u, h, 1.0 - h)
-        U = np.vstack([u[None, :], c + h * np.eye(d), c - h * np.eye(d)])
-        if self._stencil is None:  # the designs of a stencil, compiled once
+        k, d = U.shape
+        h = self.FD_STEP
+        C = np.clip(U, h, 1.0 - h)
+        rows = np.concatenate([U[:, None, :], C[:, None, :] + h * np.eye(d), C[:, None, :] - h * np.eye(d)], axis=1)
+        if self._stencil is None:  # the designs of the stencils, compiled once
             sp = self.space
             self._stencil = jax.jit(lambda U: (*jax.vmap(lambda u: sp.dm(sp.to_x(u)))(U),
                                                jax.vmap(lambda u: sp.dm.drop_speed(sp.to_x(u)))(U)
                                                if not sp.dm.chain else jnp.ones(U.shape[0])))
-        stacks, states, speed = self._stencil(U)
+        stacks, states, speed = self._stencil(rows.reshape(k * (2 * d + 1), d))
         sol = simulate_batch(stacks, states, save_steps=False, max_steps=16_384, until="launch",
                              tolerances=Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True))
-        if not np.all(sol.ok):
-            raise RuntimeError(f"a design of the stencil did not complete: {sol.status_code} {sol.num_steps}")
         speed = np.asarray(speed) if not self.space.dm.chain else self.space.dm.drop_speed(None)
-        f = -sol.launch_velocities[:, -1] / speed
-        return f[0], (f[1 : d + 1] - f[d + 1 :]) / (2 * h)
+        f = np.where(sol.ok, -sol.launch_velocities[:, -1] / speed, np.nan).reshape(k, 2 * d + 1)
+        return f[:, 0], (f[:, 1 : d + 1] - f[:, d + 1 :]) / (2 * h)
 
     def _total_mass(self, u):
         return self.space.dm.fields(self.space.to_x(u))["stack.masses"].sum()
 
     # gradient path -----------------------------------------------------------------------
-    def value_and_grad(self, u):
-        self.count += 1
-        u = np.asarray(u, dtype=float)
+    def values_and_grads(self, U) -> tuple[np.ndarray, np.ndarray]:
+        """The objective and its gradient at each row of `U` `(k, d)`, `k <= width`, in one batched
+        call (padded as the class docstring says). A design the solver cannot finish gets a large value
+        and no slope (the line search backs off); when a batch raises, its rows are evaluated one by one
+        so that only the failing design is marked."""
+        U = np.asarray(U, dtype=float).reshape(-1, len(self.space.slots))
+        k = len(U)
+        self.count += k
+
+        def batch(rows):
+            size = min(self.width, 1 << (len(rows) - 1).bit_length())
+            padded = np.concatenate([rows, np.repeat(rows[:1], size - len(rows), axis=0)])
+            v, g = self._vg(padded)
+            return np.array(v, dtype=float)[: len(rows)], np.array(g, dtype=float)[: len(rows)]
+
         try:
-            v, g = self._vg(u)
-            v, g = float(v), np.asarray(g, dtype=float)
-        except Exception:  # a design the solver cannot finish: a large value, no slope (the line search backs off)
-            v, g = 1e3, np.zeros(len(u))
-        if not (math.isfinite(v) and np.all(np.isfinite(g))):
-            v, g = 1e3, np.zeros(len(u))
+            v, g = batch(U)
+        except Exception:  # a failed solve raises for the whole batch (`launch_velocity`): find which
+            v, g = np.full(k, np.nan), np.full(U.shape, np.nan)
+            for i in range(k):
+                try:
+                    v[i : i + 1], g[i : i + 1] = batch(U[i : i + 1])
+                except Exception:
+                    pass
+        bad = ~(np.isfinite(v) & np.all(np.isfinite(g), axis=1))
+        v[bad], g[bad] = 1e3, 0.0
         return v, g
+
+    def value_and_grad(self, u):
+        """`values_and_grads` of one design: `(value, gradient)`."""
+        v, g = self.values_and_grads(np.asarray(u, dtype=float)[None, :])
+        return float(v[0]), g[0]
 
     # exact path ----------------------------------------------------------------------------
     def metrics(self, u) -> dict:
@@ -551,9 +586,12 @@ class _Run:
     evaluations: int = 0
 
 
-def _local(space: _Space, ev: _Evaluator, problem: OptimizeSpec, u0: np.ndarray) -> _Run:
+def _local(space: _Space, ev: _Evaluator, problem: OptimizeSpec, u0: np.ndarray, fun=None) -> _Run:
+    """One local search from `u0`; `fun(u) -> (value, gradient)` on the gradient path (default
+    `ev.value_and_grad`)."""
     from scipy.optimize import Bounds, NonlinearConstraint, minimize
 
+    fun = fun or ev.value_and_grad
     d = len(u0)
     bounds = Bounds(np.zeros(d), np.ones(d))
     history: list[float] = []
@@ -576,18 +614,99 @@ def _local(space: _Space, ev: _Evaluator, problem: OptimizeSpec, u0: np.ndarray)
             history.append(float(intermediate_result.fun))
 
         if cons:
-            res = minimize(ev.value_and_grad, u0, jac=True, method="SLSQP", bounds=bounds, constraints=cons,
+            res = minimize(fun, u0, jac=True, method="SLSQP", bounds=bounds, constraints=cons,
                            callback=record, options={"maxiter": problem.max_iterations, "ftol": 1e-14})
         else:
             # stop at the gradient's own accuracy: ~1e-9 relative by reverse mode, ~1e-5 by the batched
             # central differences (their noise, `_Evaluator.FD_STEP`); beyond it a line search only fails,
             # and each failure costs up to `maxls` evaluations
             gtol = 1e-9 if ev.gradient == "reverse mode" else 1e-6
-            res = minimize(ev.value_and_grad, u0, jac=True, method="L-BFGS-B", bounds=bounds, callback=record,
+            res = minimize(fun, u0, jac=True, method="L-BFGS-B", bounds=bounds, callback=record,
                            options={"maxiter": problem.max_iterations, "ftol": 1e-13, "gtol": gtol,
                                     "maxls": 20})
     return _Run(np.clip(res.x, 0, 1), float(res.fun), int(getattr(res, "nit", 0)), str(res.message),
                 bool(res.success), history, int(getattr(res, "nfev", 0)))
+
+
+class _Lockstep:
+    """Gathers the objective calls of several local searches, each in its own thread, into one batched
+    evaluation (`_Evaluator.values_and_grads`): the serving thread waits until every live search has
+    asked for its next point, evaluates them together and hands each its result."""
+
+    def __init__(self, ev: _Evaluator, size: int):
+        import threading
+
+        self.ev, self.live = ev, size
+        self.pending: dict[int, np.ndarray] = {}
+        self.results: dict[int, tuple] = {}
+        self.cv = threading.Condition()
+
+    def function(self, i: int):
+        def fun(u):
+            with self.cv:
+                self.pending[i] = np.array(u, dtype=float)
+                self.cv.notify_all()
+                self.cv.wait_for(lambda: i in self.results)
+                return self.results.pop(i)
+        return fun
+
+    def finished(self) -> None:
+        with self.cv:
+            self.live -= 1
+            self.cv.notify_all()
+
+    def serve(self) -> None:
+        while True:
+            with self.cv:
+                self.cv.wait_for(lambda: self.live == 0 or len(self.pending) == self.live)
+                if self.live == 0:
+                    return
+                batch, self.pending = self.pending, {}
+            keys = sorted(batch)
+            try:
+                v, g = self.ev.values_and_grads(np.stack([batch[i] for i in keys]))
+                out = {i: (float(v[j]), g[j]) for j, i in enumerate(keys)}
+            except BaseException:  # never leave a search waiting: it ends on the large value
+                out = {i: (1e3, np.zeros_like(batch[i])) for i in keys}
+                with self.cv:
+                    self.results.update(out)
+                    self.cv.notify_all()
+                raise
+            with self.cv:
+                self.results.update(out)
+                self.cv.notify_all()
+
+
+def _searches(space: _Space, ev: _Evaluator, problem: OptimizeSpec, starts: list) -> list[_Run]:
+    """The local searches from every start. On the gradient path they run in lockstep: one scipy search
+    per start in its own thread, every round of their objective calls one batched, compiled evaluation
+    (`_Lockstep`), so `k` starts cost about one batched solve per iteration instead of `k` solves. The
+    pulse path (derivative-free, one solve with its history per evaluation) runs them one after another."""
+    import threading
+
+    if problem.needs_pulse or len(starts) < 2 or ev.width < 2:
+        return [_local(space, ev, problem, u) for u in starts]
+    lock = _Lockstep(ev, len(starts))
+    runs: list = [None] * len(starts)
+    errors: list = []
+
+    def work(i, u0):
+        try:
+            runs[i] = _local(space, ev, problem, u0, fun=lock.function(i))
+        except BaseException as exc:  # re-raised by the serving thread below
+            errors.append(exc)
+        finally:
+            lock.finished()
+
+    threads = [threading.Thread(target=work, args=(i, u), daemon=True) for i, u in enumerate(starts)]
+    for t in threads:
+        t.start()
+    lock.serve()
+    for t in threads:
+        t.join()
+    if errors:
+        raise errors[0]
+    return runs
 
 
 # ------------------------------------------------------------------------------------------ result
@@ -772,11 +891,11 @@ def optimize(path: str | Path) -> OptimizeResult:
     evaluators = []
     per_n: dict = {}  # the best of every number of masses tried (search values, before the exact re-run)
     for space in spaces:
-        ev = _Evaluator(space, problem)
+        ev = _Evaluator(space, problem, width=problem.starts)
         u_file = space.to_u(space.dm.values())
         screened = _screen(space, ev, problem)
         starts = [u_file] + list(screened[: max(problem.starts - 1, 0)])
-        runs = [_local(space, ev, problem, u) for u in starts]
+        runs = _searches(space, ev, problem, starts)
         evaluators.append(ev)
         runs.sort(key=lambda r: r.value)
         top = runs[0]

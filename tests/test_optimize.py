@@ -177,6 +177,36 @@ def test_touching_three_mass_optimum_matches_independent_scipy_optimum(tmp_path)
     assert result.top_velocity_gain > result.rigid_designs["mvg"].top_velocity_gain
 
 
+def test_lockstep_searches_equal_scipys_searches_run_one_by_one():
+    """The starts' local searches run in lockstep (one thread each, every round of their objective calls
+    one batched evaluation): on the bounded Rosenbrock function (deterministic, evaluated row by row)
+    every search ends exactly where scipy's L-BFGS-B, run alone from the same start, ends, with the same
+    iterations and evaluations; the rounds are gathered (a batch holds every live search) and their
+    number is the largest search's evaluation count."""
+    from scipy.optimize import minimize, rosen, rosen_der
+
+    from hertz_chain.optimization import OptimizeSpec, _searches
+
+    calls = []
+
+    def values_and_grads(U):
+        calls.append(len(U))
+        return np.array([rosen(u) for u in U]), np.array([rosen_der(u) for u in U])
+
+    ev = types.SimpleNamespace(gradient="batched central differences", width=4, values_and_grads=values_and_grads,
+                               value_and_grad=None)
+    starts = [np.array(u) for u in ([0.1, 0.9, 0.2], [0.5, 0.5, 0.5], [0.95, 0.05, 0.6], [0.3, 0.7, 0.99])]
+    problem = OptimizeSpec(max_iterations=200)
+    runs = _searches(None, ev, problem, starts)
+    for u0, run in zip(starts, runs):
+        ref = minimize(lambda u: (rosen(u), rosen_der(u)), u0, jac=True, method="L-BFGS-B", bounds=[(0, 1)] * 3,
+                       options={"maxiter": 200, "ftol": 1e-13, "gtol": 1e-6, "maxls": 20})
+        np.testing.assert_array_equal(run.u, np.clip(ref.x, 0, 1))
+        assert (run.value, run.iterations, run.evaluations) == (ref.fun, ref.nit, ref.nfev)
+    assert max(calls) == 4 and len(calls) == max(r.evaluations for r in runs)
+    assert sum(calls) == sum(r.evaluations for r in runs)
+
+
 def test_wide_gaps_recover_the_mvg_design(tmp_path):
     """Independent collisions (gaps 5 cm, g = 0), Tsuji e = 0.8, n = 6, end masses 8.4 kg and 0.1008 kg,
     from a start 20-30 % off: the optimum is the paper's MVG stack, m_i = m_1 R^((i-1)/(n-1)) (Eq 15),
