@@ -62,6 +62,11 @@ class _Replay(eqx.Module):
     - a release (a clamped contact's unclamped force changes sign while it overlaps: the kink of its
       force at `F = 0`): two solver steps that meet where that force is zero, found by one secant step
       from the linear guess (its derivative is the implicit function theorem's).
+
+    `split`: whether the last three kinds apply at all. Where every law's onset is smooth
+    (`registry.LawRow.smooth_onset`: Hertz, Hunt–Crossley) every step is plain: the solver's steps
+    resolve them (within 1e-6 of central differences, `benchmarks/optimize.md`) and the gradient costs
+    what it did before the split (`_smooth_onsets`).
     """
 
     stack_static: object
@@ -71,6 +76,7 @@ class _Replay(eqx.Module):
     mask: jax.Array
     clamped: jax.Array
     n: int = eqx.field(static=True)
+    split: bool = eqx.field(static=True, default=True)
 
     def _args(self, dyn):
         return FieldArgs(eqx.combine(dyn, self.stack_static), self.scale, self.T)
@@ -121,36 +127,46 @@ class _Replay(eqx.Module):
         frac = jnp.where(closes, d0 / jnp.where(closes, d0 - d1, 1.0), jnp.inf)
         return jnp.any(closes), jnp.argmin(frac)
 
-    def onset_times(self, dyn, ts, ys, N):
-        """`(len(ts),)` the latest onset time at the start of every step `k = 1..N` of a history (`-inf`
-        before the first), without gradients: the primal `t*` the reverse sweep linearises at (`onset`'s
-        prediction from the step's start: the same to third order in the step)."""
-
-        def at(k, t_star):
-            closes, j = self.closing(ys[k - 1], ys[k], ts[k] - ts[k - 1])
-
-            def onset(_):
-                d, rate = self.approach(dyn, ys[k - 1], ts[k - 1])[:, j]
-                return ts[k - 1] + jnp.where(d < 0, -d / jnp.where(rate > 0, rate, 1.0), 0.0)
-
-            return jax.lax.cond(closes, onset, lambda _: t_star, None)
-
-        def body(k, carry):
-            t_star, table = carry
-            return at(k, t_star), table.at[k].set(t_star)
-
+    def classify(self, dyn, ts, ys, N):
+        """Every step's kind (class docstring), without gradients, vectorised over the history (no loop):
+        `(kind, j, jr, t*, F)`, per step `k = 1..len(ts) - 1` at index `k - 1`: the kind (0 plain, 1 in
+        the window, 2 onset, 3 release), the contact that closes and the one that lets go, the latest
+        onset time at the step's start (`-inf` before the first; the primal `t*` the reverse sweep
+        linearises at: `onset`'s prediction from the step's start, the same to third order in the step),
+        and every row's unclamped forces."""
         dyn = jax.lax.stop_gradient(dyn)
-        return jax.lax.fori_loop(1, N + 1, body, (-jnp.inf, jnp.full(ts.shape, -jnp.inf)))[1]
+        y0, y1, t0, t1 = ys[:-1], ys[1:], ts[:-1], ts[1:]
+        steps = jnp.arange(1, ts.shape[0]) <= N
+        closes, j = jax.vmap(self.closing)(y0, y1, t1 - t0)
+        closes &= steps
 
-    def vjp(self, cotangents, dyn, y0, t_star, y1_forward, t0, t1):
+        def onset_at(y, t, jj):
+            d, rate = self.approach(dyn, y, t)[:, jj]
+            return t + jnp.where(d < 0, -d / jnp.where(rate > 0, rate, 1.0), 0.0)
+
+        onsets = jnp.where(closes, jax.vmap(onset_at)(y0, jnp.where(steps, t0, 0.0), j), -jnp.inf)
+        # onsets only move forward in time (each lies in its own step): the latest before step k is a
+        # running maximum over the steps before it
+        star = jnp.concatenate([jnp.full(1, -jnp.inf), jax.lax.cummax(onsets)[:-1]])
+        window = jnp.isfinite(star) & (t0 - star < _ONSET_WINDOW)
+        F = jax.vmap(lambda y: self.unclamped(dyn, y))(jnp.where(jnp.isfinite(ys), ys, 0.0))
+        d = jax.vmap(self._overlaps)(ys)
+        kink = ((self.mask & self.clamped)[None, :] & (d[:-1] > 0) & (d[1:] > 0)
+                & (jnp.sign(F[:-1]) * jnp.sign(F[1:]) < 0) & steps[:, None])
+        kind = jnp.where(closes, 2, jnp.where(window, 1, jnp.where(jnp.any(kink, axis=1), 3, 0)))
+        return kind, j, jnp.argmax(kink, axis=1), star, F
+
+    def vjp(self, cotangents, dyn, y0, t_star, t0, t1, kind, j, jr, f0, f1):
         """The step's vector-Jacobian product: `cotangents = (lambda_y, lambda_t*)` of `(y', t*')` to those
-        of `(dyn, y0, t*)`. The kind of step (class docstring) is chosen outside the differentiation, so a
-        plain step costs what it did before onsets were treated."""
-        closes, j = self.closing(y0, y1_forward, t1 - t0)
-        window = jnp.isfinite(t_star) & (t0 - t_star < _ONSET_WINDOW)
+        of `(dyn, y0, t*)`. The kind of step (class docstring) comes from `classify`, outside the
+        differentiation, so a plain step costs what it did before onsets were treated; `f0`, `f1`: the
+        unclamped forces at the step's ends."""
 
         def plain(d, y, ts):
             return self._solver_step(dfx.ODETerm(_scaled_field), y, t0, t1, self._args(d)), ts
+
+        if not self.split:
+            return jax.vjp(plain, dyn, y0, t_star)[1](cotangents)
 
         def in_window(d, y, ts):
             sa, sb = (jnp.maximum(t - ts, 0.0) ** (1.0 / _ONSET_POWER) for t in (t0, t1))
@@ -158,11 +174,6 @@ class _Replay(eqx.Module):
 
         def onset(d, y, ts):
             return self.onset(d, y, t0, t1, ts, j)
-
-        f0, f1 = self.unclamped(dyn, y0), self.unclamped(dyn, y1_forward)
-        d0, d1 = self._overlaps(y0), self._overlaps(y1_forward)
-        kink = self.mask & self.clamped & (d0 > 0) & (d1 > 0) & (jnp.sign(f0) * jnp.sign(f1) < 0)
-        kinks, jr = jnp.any(kink), jnp.argmax(kink)
 
         def release(d, y, ts):
             # split where the unclamped force is zero (the clamp's kink): from the linear guess, one secant
@@ -175,7 +186,6 @@ class _Replay(eqx.Module):
             ta = t0 + jnp.clip(th, 0.0, 1.0) * h
             return self._solver_step(term, self._solver_step(term, y, t0, ta, args), ta, t1, args), ts
 
-        kind = jnp.where(closes, 2, jnp.where(window, 1, jnp.where(kinks, 3, 0)))
         return jax.lax.switch(kind, [lambda fn=fn: jax.vjp(fn, dyn, y0, t_star)[1](cotangents)
                                      for fn in (plain, in_window, onset, release)])
 
@@ -185,6 +195,15 @@ class _Replay(eqx.Module):
         Y = y * self.scale
         x, v, _ = stack.split(Y)
         return stack.unclamped_forces(stack.overlaps(x), stack.overlap_rates(v), stack.memory(Y))
+
+
+def _smooth_onsets(stack) -> bool:
+    """Whether every contact law of `stack` has a smooth onset (`registry.LawRow.smooth_onset`; the far
+    wall's contact is elastic Hertz)."""
+    from .registry import LAWS
+
+    smooth = {row.cls for row in LAWS.values() if row.smooth_onset}
+    return all(type(law).__name__ in smooth for law in stack.laws)
 
 
 @eqx.filter_custom_vjp
@@ -240,18 +259,23 @@ def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _SolveConfig)
         (ct_Y,) = vjp((rows_ct[:, 2], rows_ct[:, 3], rows_ct[:, 4], rows_ct[:, 5]))
         ct_hist = ct_hist.at[idx].add(jnp.where(valid[:, None], ct_Y, 0.0))
     dyn, static = eqx.partition(stack, eqx.is_inexact_array)
-    replay = _Replay(static, scale, T, cfg.solver, stack.interface_mask(), jnp.asarray(stack.clamped()), stack.n)
+    replay = _Replay(static, scale, T, cfg.solver, stack.interface_mask(), jnp.asarray(stack.clamped()), stack.n,
+                     split=not _smooth_onsets(stack))
     # The onset proxies (`resolve_onsets`, entries state_size:) feed nothing back into the motion and no output
     # depends on them: replay the physical equations only (the same arithmetic, component by component).
     ct_hist, ys = ct_hist[:, :n3], hist_y[:, :n3]
 
-    star_table = replay.onset_times(dyn, hist_t, ys, N)
+    if replay.split:
+        kinds, js, jrs, stars, F = replay.classify(dyn, hist_t, ys, N)
+    else:
+        kinds = js = jrs = jnp.zeros(hist_t.shape[0] - 1, int)
+        stars, F = jnp.full(hist_t.shape[0] - 1, -jnp.inf), jnp.zeros((hist_t.shape[0], stack.n))
 
     def body(i, carry):
         lam, lam_star, acc = carry
         k = N - i
-        g_dyn, g_y, g_star = replay.vjp((lam, lam_star), dyn, ys[k - 1], star_table[k], ys[k], hist_t[k - 1],
-                                        hist_t[k])
+        g_dyn, g_y, g_star = replay.vjp((lam, lam_star), dyn, ys[k - 1], stars[k - 1], hist_t[k - 1], hist_t[k],
+                                        kinds[k - 1], js[k - 1], jrs[k - 1], F[k - 1], F[k])
         return g_y + ct_hist[k - 1], g_star, jax.tree.map(jnp.add, acc, g_dyn)
 
     lam, _, acc = jax.lax.fori_loop(0, N, body, (ct_hist[N], jnp.zeros(()), jax.tree.map(jnp.zeros_like, dyn)))

@@ -21,10 +21,16 @@ masses is optimised from masses spaced geometrically between the file's end mass
   bounded quasi-Newton L-BFGS-B (SLSQP when a total-mass budget adds a linear constraint). Not
   optimistix: its quasi-Newton methods are unconstrained, and a reparametrisation onto the box can only
   approach a bound, while touching stacks often have their optimum on one.
-- *Pulse targets and peak limits* (`objective = "pulse"`, `max_peak_g`, `max_peak_force`): the peak
-  and the duration of a pulse are a maximum and level crossings over the history, not smooth functions
-  of the design; the search uses the exact post-processor (`pulse.pulse_metrics` on the solver's steps)
-  with scipy's derivative-free, bound- and constraint-aware COBYQA (Ragonneau & Zhang 2023).
+- *Pulse targets and peak limits* (`objective = "pulse"`, `max_peak_g`, `max_peak_force`): the peak g
+  and the duration are computed as the exact post-processor does (`pulse.pulse_metrics` on the solver's
+  steps over the first cascade, with the exact velocity), which makes them smooth in the design: ΔV is
+  the exact velocity change, the peak is refined between the steps on the velocity's cubic Hermite
+  interpolant, and the equivalent half-sine duration is `pi dV / (2 peak)`. Their derivatives are
+  batched central differences (the `2d + 1` designs of a stencil in one `simulate_batch` with the step
+  histories), and SLSQP handles the bounds and the constraints. The reported values are the exact
+  post-processor's on the written file.
+- *SRS targets* (`objective = "srs"`): an SRS is a maximum over each oscillator's response; the search
+  is scipy's derivative-free, bound- and constraint-aware COBYQA (Ragonneau & Zhang 2023) on it.
 - *Global*: a scrambled Sobol pre-screen (`scipy.stats.qmc`, seeded) of `screen` designs evaluated in
   one compiled, vmapped `simulate_batch`; the best `starts - 1` of them and the file's own stack start
   the local searches. The result says whether the starts agree.
@@ -372,6 +378,24 @@ def _objective(p: OptimizeSpec, mt: dict) -> float:
 
 
 
+def _parabola_max(t: np.ndarray, y: np.ndarray) -> float:
+    """The largest value of the samples `y` `(steps, k)` at times `t`, refined between the steps by the
+    parabola through the largest sample and its two neighbours (smooth in the design as the steps move,
+    error O(dt^3) against O(dt^2) for the bare maximum); the bare maximum at the record's ends."""
+    i, j = np.unravel_index(int(np.argmax(y)), y.shape)
+    top = float(y[i, j])
+    if not 0 < i < len(t) - 1:
+        return top
+    (t0, t1, t2), (y0, y1, y2) = t[i - 1 : i + 2], y[i - 1 : i + 2, j]
+    # the interpolant is y1 + b (s - t1) + c (s - t1)^2: its vertex is y1 - b^2 / (4 c)
+    d01, d12 = (y1 - y0) / (t1 - t0), (y2 - y1) / (t2 - t1)
+    c = (d12 - d01) / (t2 - t0)
+    if not c < 0:
+        return top
+    b = d01 + c * (t1 - t0)  # slope at t1
+    return max(top, float(y1 - b * b / (4 * c)))
+
+
 class _Evaluator:
     """The objective and constraints of one `_Space`, compiled once and reused for every start.
 
@@ -385,7 +409,7 @@ class _Evaluator:
 
         self.space, self.problem = space, problem
         self.count = 0
-        self._stencil = None
+        self._stencil = self._designs = self._last = None
         self.g = space.dm.gravity
         from .registry import LAWS
 
@@ -480,7 +504,6 @@ class _Evaluator:
     # exact path ----------------------------------------------------------------------------
     def metrics(self, u) -> dict:
         """The exact metrics of the design at `u` from one solve with its step history."""
-        from .pulse import pulse_metrics
         from .simulation import simulate
 
         self.count += 1
@@ -488,25 +511,100 @@ class _Evaluator:
         stack, state = self.space.dm(x)
         opts = dict(self.space.dm.built.simulate_options, throw=False)
         sol = simulate(stack, state, **opts)
-        out = {"ok": sol.status.ok, "gain": float(sol.launch_velocities[-1]) / float(self.space.dm.drop_speed(x))}
+        gain = float(sol.launch_velocities[-1]) / float(self.space.dm.drop_speed(x))
         st = sol.steps
         if st is None or not sol.status.ok:
-            return out | {"ok": False}
-        keep = np.isfinite(st.t)
-        if np.isfinite(sol.cascade_end_time):
-            keep &= st.t <= sol.cascade_end_time
-        t = st.t[keep]
-        a = st.accelerations[keep, -1] + self.g
-        v = st.velocities[keep, -1] + self.g * t
+            return {"ok": False, "gain": gain}
+        return self._pulse_of(gain, sol.cascade_end_time, st.t, st.accelerations, st.velocities, st.forces)
+
+    def _pulse_of(self, gain, cascade_end, t, acc, vel, forces) -> dict:
+        """The metrics of one solved design from its step history: the top pulse over the first cascade
+        by `pulse.pulse_metrics` with the exact velocity (ΔV exact, the peak refined between the steps
+        on the velocity's cubic Hermite interpolant: both smooth in the design)."""
+        from .pulse import pulse_metrics
+
+        out = {"ok": True, "gain": float(gain)}
+        keep = np.isfinite(t)
+        if np.isfinite(cascade_end):
+            keep &= t <= cascade_end
+        t = t[keep]
+        a = acc[keep, -1] + self.g
+        v = vel[keep, -1] + self.g * t
         try:
             pm = pulse_metrics(t, a, velocity=v)
         except Exception:
             return out | {"ok": False}
         dur = pm.equivalent_half_sine_duration if self.problem.duration == "half-sine" else pm.duration_10
-        out.update(peak_g=pm.peak / 9.80665, duration=dur, peak_force=float(np.max(st.forces[keep])))
+        out.update(peak_g=pm.peak / 9.80665, duration=dur, peak_force=_parabola_max(t, forces[keep]))
         if self.problem.objective == "srs":
             out["srs_error_db"] = self.srs_error_db(t, a / 9.80665)
         return out
+
+    def metrics_batch(self, U) -> list[dict]:
+        """`metrics` of every row of `U` `(k, d)` from compiled, batched solves with the step histories
+        (`simulate_batch`), each post-processed as `metrics` does: in pieces of a stencil's `2d + 1`
+        designs (the last padded), so that one shape compiles."""
+        import jax
+        import jax.numpy as jnp
+
+        from .simulation import simulate_batch
+
+        U = np.asarray(U, dtype=float)
+        size = 2 * len(self.space.slots) + 1  # one compiled shape: a stencil's; more rows go in pieces
+        if len(U) > size:
+            return [mt for i in range(0, len(U), size) for mt in self.metrics_batch(U[i : i + size])]
+        k = len(U)
+        self.count += k
+        U = np.concatenate([U, np.repeat(U[:1], size - k, axis=0)])
+        if self._designs is None:
+            sp = self.space
+            self._designs = jax.jit(lambda U: (*jax.vmap(lambda u: sp.dm(sp.to_x(u)))(U),
+                                               jax.vmap(lambda u: sp.dm.drop_speed(sp.to_x(u)))(U)
+                                               if not sp.dm.chain else jnp.ones(U.shape[0])))
+        stacks, states, speed = self._designs(U)
+        opts = dict(self.space.dm.built.simulate_options)
+        opts.setdefault("max_steps", 16_384)
+        sol = simulate_batch(stacks, states, save_steps=True, **opts)
+        speed = np.asarray(speed) if not self.space.dm.chain else np.full(len(U), self.space.dm.drop_speed(None))
+        st = sol.steps
+        return [self._pulse_of(sol.launch_velocities[b, -1] / speed[b], sol.cascade_end_time[b], st["t"][b],
+                               st["accelerations"][b], st["velocities"][b], st["forces"][b])
+                if sol.ok[b] else {"ok": False} for b in range(k)]
+
+    def _pulse_values(self, mt: dict) -> np.ndarray:
+        """`[objective, constraints...]` of one design's metrics (constraints >= 0 where feasible)."""
+        p = self.problem
+        if not mt["ok"]:
+            return np.array([1e3] + [-1.0] * self.n_constraints)
+        out = [_objective(p, mt)]
+        if p.max_peak_g is not None:
+            out.append(1.0 - mt["peak_g"] / p.max_peak_g)
+        if p.max_peak_force is not None:
+            out.append(1.0 - mt["peak_force"] / p.max_peak_force)
+        return np.array(out)
+
+    @property
+    def n_constraints(self) -> int:
+        return (self.problem.max_peak_g is not None) + (self.problem.max_peak_force is not None)
+
+    def pulse_gradient(self, u) -> tuple[np.ndarray, np.ndarray]:
+        """`(values, jacobian)` of `[objective, constraints...]` at `u` by central differences of the exact
+        post-processor, the `2d + 1` designs in one batched solve (`metrics_batch`; step `FD_STEP`
+        in the unit box, the stencil kept inside it); cached for the last point (SLSQP asks for the
+        objective, the constraints and their derivatives at one point separately)."""
+        u = np.asarray(u, dtype=float)
+        key = u.tobytes()
+        if self._last is not None and self._last[0] == key:
+            return self._last[1]
+        d, h = len(u), self.FD_STEP
+        c = np.clip(u, h, 1.0 - h)
+        rows = np.vstack([u[None, :], c + h * np.eye(d), c - h * np.eye(d)])
+        vals = np.array([self._pulse_values(mt) for mt in self.metrics_batch(rows)])
+        jac = ((vals[1 : d + 1] - vals[d + 1 :]) / (2 * h)).T
+        bad = ~np.isfinite(jac)
+        jac[bad] = 0.0
+        self._last = (key, (vals[0], jac))
+        return vals[0], jac
 
     def srs_frequencies(self) -> tuple[np.ndarray, np.ndarray]:
         """The natural frequencies of the SRS fit (1/12 octave across the target table, at most 120)
@@ -556,8 +654,12 @@ def _screen(space: _Space, ev: _Evaluator, problem: OptimizeSpec) -> np.ndarray:
     if problem.screen == 0 or d == 0:
         return np.zeros((0, d))
     U = qmc.Sobol(d, scramble=True, seed=problem.seed).random(problem.screen)
-    if problem.needs_pulse:  # the exact path: one solve per point, as the search itself
-        vals = np.array([ev.pulse_objective(u) for u in U])
+    if problem.needs_pulse:  # the exact post-processor on every point's history, one batched solve
+        vals = []
+        for mt in ev.metrics_batch(U):
+            v = ev._pulse_values(mt)
+            vals.append(v[0] if np.all(v[1:] >= 0) else np.inf)
+        vals = np.array(vals)
     else:
         from .simulation import simulate_batch
 
@@ -597,12 +699,23 @@ def _local(space: _Space, ev: _Evaluator, problem: OptimizeSpec, u0: np.ndarray,
     history: list[float] = []
     cons = []
     if problem.total_mass is not None:
-        if problem.needs_pulse:
+        if problem.objective == "srs":
             cons.append(NonlinearConstraint(lambda u: float(ev._mass(u)[0]), -np.inf, problem.total_mass))
         else:
             cons.append({"type": "ineq", "fun": lambda u: problem.total_mass - float(ev._mass(u)[0]),
                          "jac": lambda u: -np.asarray(ev._mass(u)[1])})
-    if problem.needs_pulse:
+    if problem.needs_pulse and problem.objective != "srs":
+        # peak, duration and peak force as smooth functions of the design (`_Evaluator._pulse_of`), their
+        # derivatives by batched central differences; SLSQP for the bounds and the constraints
+        if ev.n_constraints:
+            cons.append({"type": "ineq", "fun": lambda u: ev.pulse_gradient(u)[0][1:],
+                         "jac": lambda u: ev.pulse_gradient(u)[1][1:]})
+        res = minimize(lambda u: float(ev.pulse_gradient(u)[0][0]), u0, jac=lambda u: ev.pulse_gradient(u)[1][0],
+                       method="SLSQP", bounds=bounds, constraints=cons,
+                       callback=lambda intermediate_result: history.append(float(intermediate_result.fun)),
+                       # the objective's noise (the adaptive solves, ~1e-10 relative) bounds the precision
+                       options={"maxiter": problem.max_iterations, "ftol": 1e-9})
+    elif problem.needs_pulse:
         if problem.max_peak_g is not None or problem.max_peak_force is not None:
             cons.append(NonlinearConstraint(ev.pulse_constraints, 0.0, np.inf))
         res = minimize(ev.pulse_objective, u0, method="COBYQA", bounds=bounds, constraints=cons,
@@ -831,9 +944,12 @@ def _document(space: _Space, x: np.ndarray) -> dict:
 
 
 def _projected_gradient(ev: _Evaluator, u: np.ndarray) -> float:
-    if ev.problem.needs_pulse:
+    """The projected gradient's norm in the unit box (NaN where constraints other than the bounds
+    apply, or on the derivative-free SRS path)."""
+    p = ev.problem
+    if p.objective == "srs" or (p.needs_pulse and (ev.n_constraints or p.total_mass is not None)):
         return math.nan
-    _, g = ev.value_and_grad(u)
+    g = ev.pulse_gradient(u)[1][0] if p.needs_pulse else ev.value_and_grad(u)[1]
     return float(np.linalg.norm(u - np.clip(u - g, 0.0, 1.0), ord=np.inf))
 
 
@@ -942,8 +1058,10 @@ def optimize(path: str | Path) -> OptimizeResult:
         status = OptimizeStatus.FAILED
         why = f"the best design could not be simulated ({report.status.text})"
     convergence = {
-        "method": ("COBYQA" if problem.needs_pulse else ("SLSQP" if problem.total_mass else "L-BFGS-B")),
-        "gradient": None if problem.needs_pulse else ev.gradient,
+        "method": ("COBYQA" if problem.objective == "srs" else
+                   "SLSQP" if problem.total_mass or problem.needs_pulse else "L-BFGS-B"),
+        "gradient": (None if problem.objective == "srs" else
+                     "batched central differences" if problem.needs_pulse else ev.gradient),
         "starts": [{"value": r.value, "iterations": r.iterations, "evaluations": r.evaluations,
                     "message": r.message, "success": r.success} for r in runs],
         "starts_agree": f"{agree} of {len(runs)} within 1e-6 (relative, at least 1e-8 absolute) of the best",
