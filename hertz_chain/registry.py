@@ -37,7 +37,8 @@ class LawRow:
       (`simulation.launch_velocity`) differentiates every law accurately since onsets are split out of
       the replayed steps (2e-6 against central differences with gaps, `tests/test_optimize.py`); forward
       mode and diffrax's adjoints do not for the other laws (errors of order 1 with gaps), and
-      `hertz_chain.optimization` still uses batched central differences for them.
+      `hertz_chain.optimization` still uses batched central differences for them. A stack whose every
+      law has a smooth onset is replayed with plain steps (no split: cheaper, as accurate).
     - `speed_dependent`: its restitution changes with the impact speed, so calibrating it to a
       restitution needs a `calibration_velocity`; `needs_effective_mass`: calibrating it (or the law
       itself) needs the interface's effective mass; `chi_map`: it takes a `CHI_MAPS` entry.
