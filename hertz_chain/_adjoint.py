@@ -64,9 +64,9 @@ class _Replay(eqx.Module):
       from the linear guess (its derivative is the implicit function theorem's).
 
     `split`: whether the last three kinds apply at all. Where every law's onset is smooth
-    (`registry.LawRow.smooth_onset`: Hertz, Hunt–Crossley) every step is plain: the solver's steps
-    resolve them (within 1e-6 of central differences, `benchmarks/optimize.md`) and the gradient costs
-    what it did before the split (`_smooth_onsets`).
+    (`registry.LawRow.smooth_onset`: Hertz, Hunt–Crossley) every step is plain, releases of a clamped
+    contact included: the solver's steps resolve them (within 1e-6 of central differences,
+    `benchmarks/optimize.md`) and the gradient costs what it did before the split (`_smooth_onsets`).
     """
 
     stack_static: object
@@ -140,13 +140,14 @@ class _Replay(eqx.Module):
         closes, j = jax.vmap(self.closing)(y0, y1, t1 - t0)
         closes &= steps
 
-        def onset_at(y, t, jj):
+        def onset_at(y, t, t_end, jj):
             d, rate = self.approach(dyn, y, t)[:, jj]
-            return t + jnp.where(d < 0, -d / jnp.where(rate > 0, rate, 1.0), 0.0)
+            return jnp.clip(t + jnp.where(d < 0, -d / jnp.where(rate > 0, rate, 1.0), 0.0), t, t_end)
 
-        onsets = jnp.where(closes, jax.vmap(onset_at)(y0, jnp.where(steps, t0, 0.0), j), -jnp.inf)
-        # onsets only move forward in time (each lies in its own step): the latest before step k is a
-        # running maximum over the steps before it
+        onsets = jnp.where(closes, jax.vmap(onset_at)(y0, jnp.where(steps, t0, 0.0), jnp.where(steps, t1, 0.0), j),
+                           -jnp.inf)
+        # each onset lies in its own step (clipped there), so they only move forward in time: the latest
+        # before step k is a running maximum over the steps before it
         star = jnp.concatenate([jnp.full(1, -jnp.inf), jax.lax.cummax(onsets)[:-1]])
         window = jnp.isfinite(star) & (t0 - star < _ONSET_WINDOW)
         F = jax.vmap(lambda y: self.unclamped(dyn, y))(jnp.where(jnp.isfinite(ys), ys, 0.0))

@@ -502,11 +502,11 @@ class _Evaluator:
         return float(v[0]), g[0]
 
     # exact path ----------------------------------------------------------------------------
-    def metrics(self, u) -> dict:
+    def metrics(self, u, count: bool = True) -> dict:
         """The exact metrics of the design at `u` from one solve with its step history."""
         from .simulation import simulate
 
-        self.count += 1
+        self.count += count
         x = np.asarray(self.space.to_x(np.asarray(u, dtype=float)))
         stack, state = self.space.dm(x)
         opts = dict(self.space.dm.built.simulate_options, throw=False)
@@ -554,7 +554,6 @@ class _Evaluator:
         if len(U) > size:
             return [mt for i in range(0, len(U), size) for mt in self.metrics_batch(U[i : i + size])]
         k = len(U)
-        self.count += k
         U = np.concatenate([U, np.repeat(U[:1], size - k, axis=0)])
         if self._designs is None:
             sp = self.space
@@ -567,9 +566,11 @@ class _Evaluator:
         sol = simulate_batch(stacks, states, save_steps=True, **opts)
         speed = np.asarray(speed) if not self.space.dm.chain else np.full(len(U), self.space.dm.drop_speed(None))
         st = sol.steps
+        # a design that did not finish in the batch's step budget is solved alone, as `metrics` (and the
+        # final report) would: with `simulate`'s own budget
         return [self._pulse_of(sol.launch_velocities[b, -1] / speed[b], sol.cascade_end_time[b], st["t"][b],
                                st["accelerations"][b], st["velocities"][b], st["forces"][b])
-                if sol.ok[b] else {"ok": False} for b in range(k)]
+                if sol.ok[b] else self.metrics(U[b], count=False) for b in range(k)]
 
     def _pulse_values(self, mt: dict) -> np.ndarray:
         """`[objective, constraints...]` of one design's metrics (constraints >= 0 where feasible)."""
@@ -596,13 +597,22 @@ class _Evaluator:
         key = u.tobytes()
         if self._last is not None and self._last[0] == key:
             return self._last[1]
+        self.count += 1
         d, h = len(u), self.FD_STEP
         c = np.clip(u, h, 1.0 - h)
         rows = np.vstack([u[None, :], c + h * np.eye(d), c - h * np.eye(d)])
-        vals = np.array([self._pulse_values(mt) for mt in self.metrics_batch(rows)])
-        jac = ((vals[1 : d + 1] - vals[d + 1 :]) / (2 * h)).T
-        bad = ~np.isfinite(jac)
-        jac[bad] = 0.0
+        mts = self.metrics_batch(rows)
+        vals = np.array([self._pulse_values(mt) for mt in mts])
+        ok = np.array([mt["ok"] for mt in mts])
+        plus, minus = vals[1 : d + 1], vals[d + 1 :]
+        # a neighbour that failed: the one-sided difference from the other side and the centre (the
+        # centre's distance to it is not h where the stencil was moved inside the box); both: no slope
+        up, down = ok[1 : d + 1, None], ok[d + 1 :, None]
+        dc = (c - u)[:, None]
+        with np.errstate(divide="ignore", invalid="ignore"):  # the branches not taken may divide by zero
+            jac = np.where(up & down, (plus - minus) / (2 * h),
+                           np.where(up, (plus - vals[0]) / (h + dc), np.where(down, (vals[0] - minus) / (h - dc), 0.0)))
+        jac = np.where(ok[0] & np.isfinite(jac), jac, 0.0).T
         self._last = (key, (vals[0], jac))
         return vals[0], jac
 
@@ -646,7 +656,8 @@ class _Evaluator:
 
 
 def _screen(space: _Space, ev: _Evaluator, problem: OptimizeSpec) -> np.ndarray:
-    """The Sobol pre-screen: the unit-box points sorted best first (one batched, compiled solve)."""
+    """The Sobol pre-screen: the unit-box points sorted best first (batched, compiled solves; on the pulse
+    path the points that break a limit come after the feasible ones, least violation first)."""
     import jax
     from scipy.stats import qmc
 
@@ -654,12 +665,11 @@ def _screen(space: _Space, ev: _Evaluator, problem: OptimizeSpec) -> np.ndarray:
     if problem.screen == 0 or d == 0:
         return np.zeros((0, d))
     U = qmc.Sobol(d, scramble=True, seed=problem.seed).random(problem.screen)
-    if problem.needs_pulse:  # the exact post-processor on every point's history, one batched solve
-        vals = []
-        for mt in ev.metrics_batch(U):
-            v = ev._pulse_values(mt)
-            vals.append(v[0] if np.all(v[1:] >= 0) else np.inf)
-        vals = np.array(vals)
+    if problem.needs_pulse:  # the exact post-processor on every point's history, batched in pieces
+        ev.count += len(U)
+        rows = np.array([ev._pulse_values(mt) for mt in ev.metrics_batch(U)])
+        violation = np.sum(np.maximum(-rows[:, 1:], 0.0), axis=1)
+        vals = np.where(violation > 0, 1e6 + violation, rows[:, 0])  # feasible first, then least violation
     else:
         from .simulation import simulate_batch
 
@@ -686,6 +696,24 @@ class _Run:
     success: bool
     history: list
     evaluations: int = 0
+    violation: float = 0.0
+
+
+_LIMIT_TOLERANCE = 1e-6
+"""A search point meets a limit (`max_peak_g`, `max_peak_force`, `total_mass`) within this, relative."""
+
+
+def _violation(ev: _Evaluator, u: np.ndarray) -> float:
+    """How far the design at `u` breaks the limits: the sum of the relative excesses (0 when it meets
+    them). Peak limits from the exact post-processor (`metrics`); the mass budget from the design."""
+    p = ev.problem
+    out = 0.0
+    if p.total_mass is not None:
+        out += max(float(ev._mass(u)[0]) / p.total_mass - 1.0, 0.0)
+    if ev.n_constraints:
+        mt = ev.metrics(u, count=False)
+        out += float(np.sum(np.maximum(-ev._pulse_values(mt)[1:], 0.0))) if mt["ok"] else math.inf
+    return out
 
 
 def _local(space: _Space, ev: _Evaluator, problem: OptimizeSpec, u0: np.ndarray, fun=None) -> _Run:
@@ -752,6 +780,7 @@ class _Lockstep:
         self.ev, self.live = ev, size
         self.pending: dict[int, np.ndarray] = {}
         self.results: dict[int, tuple] = {}
+        self.closed = False
         self.cv = threading.Condition()
 
     def function(self, i: int):
@@ -759,7 +788,9 @@ class _Lockstep:
             with self.cv:
                 self.pending[i] = np.array(u, dtype=float)
                 self.cv.notify_all()
-                self.cv.wait_for(lambda: i in self.results)
+                self.cv.wait_for(lambda: i in self.results or self.closed)
+                if i not in self.results:  # the serving loop stopped (it raised): end this search too
+                    raise RuntimeError("the batched evaluation of the starts stopped")
                 return self.results.pop(i)
         return fun
 
@@ -769,32 +800,34 @@ class _Lockstep:
             self.cv.notify_all()
 
     def serve(self) -> None:
-        while True:
-            with self.cv:
-                self.cv.wait_for(lambda: self.live == 0 or len(self.pending) == self.live)
-                if self.live == 0:
-                    return
-                batch, self.pending = self.pending, {}
-            keys = sorted(batch)
-            try:
-                v, g = self.ev.values_and_grads(np.stack([batch[i] for i in keys]))
-                out = {i: (float(v[j]), g[j]) for j, i in enumerate(keys)}
-            except BaseException:  # never leave a search waiting: it ends on the large value
-                out = {i: (1e3, np.zeros_like(batch[i])) for i in keys}
+        """Serve rounds until every search has finished. If a round raises, every waiting search is
+        released with an error (`closed`) before the exception propagates: no thread is left waiting."""
+        try:
+            while True:
                 with self.cv:
-                    self.results.update(out)
+                    self.cv.wait_for(lambda: self.live == 0 or len(self.pending) == self.live)
+                    if self.live == 0:
+                        return
+                    batch, self.pending = self.pending, {}
+                keys = sorted(batch)
+                v, g = self.ev.values_and_grads(np.stack([batch[i] for i in keys]))
+                with self.cv:
+                    self.results.update({i: (float(v[j]), g[j]) for j, i in enumerate(keys)})
                     self.cv.notify_all()
-                raise
+        finally:
             with self.cv:
-                self.results.update(out)
+                self.closed = True
                 self.cv.notify_all()
 
 
 def _searches(space: _Space, ev: _Evaluator, problem: OptimizeSpec, starts: list) -> list[_Run]:
     """The local searches from every start. On the gradient path they run in lockstep: one scipy search
     per start in its own thread, every round of their objective calls one batched, compiled evaluation
-    (`_Lockstep`), so `k` starts cost about one batched solve per iteration instead of `k` solves. The
-    pulse path (derivative-free, one solve with its history per evaluation) runs them one after another."""
+    (`_Lockstep`), so `k` starts cost about one batched solve per iteration instead of `k` batched
+    stencils. Only the gain path with batched central differences runs in lockstep; the reverse mode
+    (one design at a time, `_Evaluator`), the pulse path (SLSQP asks for values, constraints and their
+    derivatives separately; one stencil with histories per point) and the SRS path (COBYQA) run their
+    starts one after another."""
     import threading
 
     if problem.needs_pulse or len(starts) < 2 or ev.width < 2:
@@ -814,9 +847,11 @@ def _searches(space: _Space, ev: _Evaluator, problem: OptimizeSpec, starts: list
     threads = [threading.Thread(target=work, args=(i, u), daemon=True) for i, u in enumerate(starts)]
     for t in threads:
         t.start()
-    lock.serve()
-    for t in threads:
-        t.join()
+    try:
+        lock.serve()
+    finally:
+        for t in threads:
+            t.join()
     if errors:
         raise errors[0]
     return runs
@@ -947,7 +982,7 @@ def _projected_gradient(ev: _Evaluator, u: np.ndarray) -> float:
     """The projected gradient's norm in the unit box (NaN where constraints other than the bounds
     apply, or on the derivative-free SRS path)."""
     p = ev.problem
-    if p.objective == "srs" or (p.needs_pulse and (ev.n_constraints or p.total_mass is not None)):
+    if p.objective == "srs" or ev.n_constraints or p.total_mass is not None:
         return math.nan
     g = ev.pulse_gradient(u)[1][0] if p.needs_pulse else ev.value_and_grad(u)[1]
     return float(np.linalg.norm(u - np.clip(u - g, 0.0, 1.0), ord=np.inf))
@@ -1013,11 +1048,15 @@ def optimize(path: str | Path) -> OptimizeResult:
         starts = [u_file] + list(screened[: max(problem.starts - 1, 0)])
         runs = _searches(space, ev, problem, starts)
         evaluators.append(ev)
-        runs.sort(key=lambda r: r.value)
+        for r in runs:  # a start that ends beyond a limit ranks after every start that meets them
+            r.violation = _violation(ev, r.u)
+        runs.sort(key=lambda r: (r.violation > _LIMIT_TOLERANCE, r.violation if r.violation > _LIMIT_TOLERANCE
+                                 else 0.0, r.value))
         top = runs[0]
         per_n[str(space.n)] = {"objective_value": top.value, "starts": len(runs),
                                "masses": np.asarray(space.dm.fields(space.to_x(top.u))["stack.masses"]).tolist()}
-        if best is None or top.value < best[1][0].value:
+        if best is None or (top.violation > _LIMIT_TOLERANCE, top.value) < (best[1][0].violation > _LIMIT_TOLERANCE,
+                                                                           best[1][0].value):
             best = (space, runs, ev)
     space, runs, ev = best
     top = runs[0]
@@ -1050,6 +1089,10 @@ def optimize(path: str | Path) -> OptimizeResult:
     stationary = math.isfinite(pg) and pg <= PG_TOLERANCE * max(1.0, abs(top.value))
     status = OptimizeStatus.CONVERGED if (top.success or stationary) else OptimizeStatus.NOT_CONVERGED
     why = "" if status.ok else f"the search stopped: {top.message}"
+    if top.violation > _LIMIT_TOLERANCE:
+        status = OptimizeStatus.NOT_CONVERGED
+        why = (f"no start found a design within the limits: the best breaks them by {top.violation:.3g} "
+               "(relative excess of the peak g, peak force or total mass over its limit)")
     if extra and not extra["srs_within_tolerance"]:
         status = OptimizeStatus.NOT_CONVERGED
         why = (f"the best SRS found misses the target by up to {extra['srs_max_error_db']:.2f} dB, beyond "
@@ -1063,6 +1106,7 @@ def optimize(path: str | Path) -> OptimizeResult:
         "gradient": (None if problem.objective == "srs" else
                      "batched central differences" if problem.needs_pulse else ev.gradient),
         "starts": [{"value": r.value, "iterations": r.iterations, "evaluations": r.evaluations,
+                    "limit_excess": r.violation,
                     "message": r.message, "success": r.success} for r in runs],
         "starts_agree": f"{agree} of {len(runs)} within 1e-6 (relative, at least 1e-8 absolute) of the best",
         "iterations": top.iterations,

@@ -207,6 +207,31 @@ def test_lockstep_searches_equal_scipys_searches_run_one_by_one():
     assert sum(calls) == sum(r.evaluations for r in runs)
 
 
+def test_lockstep_searches_end_when_a_batched_evaluation_raises():
+    """A batched evaluation that raises (here the third round) propagates out of `_searches`, and no
+    search thread is left waiting for a result."""
+    import threading
+
+    from scipy.optimize import rosen, rosen_der
+
+    from hertz_chain.optimization import OptimizeSpec, _searches
+
+    calls = []
+
+    def values_and_grads(U):
+        calls.append(len(U))
+        if len(calls) == 3:
+            raise ZeroDivisionError("round 3")
+        return np.array([rosen(u) for u in U]), np.array([rosen_der(u) for u in U])
+
+    ev = types.SimpleNamespace(gradient="batched central differences", width=3, values_and_grads=values_and_grads,
+                               value_and_grad=None)
+    before = threading.active_count()
+    with pytest.raises(ZeroDivisionError, match="round 3"):
+        _searches(None, ev, OptimizeSpec(), [np.full(2, 0.2), np.full(2, 0.5), np.full(2, 0.8)])
+    assert threading.active_count() == before and len(calls) == 3
+
+
 def test_wide_gaps_recover_the_mvg_design(tmp_path):
     """Independent collisions (gaps 5 cm, g = 0), Tsuji e = 0.8, n = 6, end masses 8.4 kg and 0.1008 kg,
     from a start 20-30 % off: the optimum is the paper's MVG stack, m_i = m_1 R^((i-1)/(n-1)) (Eq 15),
