@@ -409,7 +409,7 @@ class _Evaluator:
 
         self.space, self.problem = space, problem
         self.count = 0
-        self._stencil = self._designs = self._last = None
+        self._designs = self._last = None
         self.g = space.dm.gravity
         from .registry import LAWS
 
@@ -443,26 +443,30 @@ class _Evaluator:
         """The negative gains at the rows of `U` `(k, d)` and their central-difference gradients:
         the `k (2d + 1)` designs in one compiled, batched solve (`simulate_batch`); each stencil is
         kept inside the box. A row whose stencil did not complete gets NaN."""
-        import jax
-        import jax.numpy as jnp
-
         from .simulation import Tolerances, simulate_batch
 
         k, d = U.shape
         h = self.FD_STEP
         C = np.clip(U, h, 1.0 - h)
         rows = np.concatenate([U[:, None, :], C[:, None, :] + h * np.eye(d), C[:, None, :] - h * np.eye(d)], axis=1)
-        if self._stencil is None:  # the designs of the stencils, compiled once
-            sp = self.space
-            self._stencil = jax.jit(lambda U: (*jax.vmap(lambda u: sp.dm(sp.to_x(u)))(U),
-                                               jax.vmap(lambda u: sp.dm.drop_speed(sp.to_x(u)))(U)
-                                               if not sp.dm.chain else jnp.ones(U.shape[0])))
-        stacks, states, speed = self._stencil(rows.reshape(k * (2 * d + 1), d))
+        stacks, states, speed = self._design_batch(rows.reshape(k * (2 * d + 1), d))
         sol = simulate_batch(stacks, states, save_steps=False, max_steps=16_384, until="launch",
                              tolerances=Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True))
         speed = np.asarray(speed) if not self.space.dm.chain else self.space.dm.drop_speed(None)
         f = np.where(sol.ok, -sol.launch_velocities[:, -1] / speed, np.nan).reshape(k, 2 * d + 1)
         return f[:, 0], (f[:, 1 : d + 1] - f[:, d + 1 :]) / (2 * h)
+
+    def _design_batch(self, U):
+        """`(stacks, states, drop speeds)` of the rows of `U` (unit box), batched; compiled once."""
+        import jax
+        import jax.numpy as jnp
+
+        if self._designs is None:
+            sp = self.space
+            self._designs = jax.jit(lambda U: (*jax.vmap(lambda u: sp.dm(sp.to_x(u)))(U),
+                                               jax.vmap(lambda u: sp.dm.drop_speed(sp.to_x(u)))(U)
+                                               if not sp.dm.chain else jnp.ones(U.shape[0])))
+        return self._designs(U)
 
     def _total_mass(self, u):
         return self.space.dm.fields(self.space.to_x(u))["stack.masses"].sum()
@@ -544,8 +548,6 @@ class _Evaluator:
         """`metrics` of every row of `U` `(k, d)` from compiled, batched solves with the step histories
         (`simulate_batch`), each post-processed as `metrics` does: in pieces of a stencil's `2d + 1`
         designs (the last padded), so that one shape compiles."""
-        import jax
-        import jax.numpy as jnp
 
         from .simulation import simulate_batch
 
@@ -555,12 +557,7 @@ class _Evaluator:
             return [mt for i in range(0, len(U), size) for mt in self.metrics_batch(U[i : i + size])]
         k = len(U)
         U = np.concatenate([U, np.repeat(U[:1], size - k, axis=0)])
-        if self._designs is None:
-            sp = self.space
-            self._designs = jax.jit(lambda U: (*jax.vmap(lambda u: sp.dm(sp.to_x(u)))(U),
-                                               jax.vmap(lambda u: sp.dm.drop_speed(sp.to_x(u)))(U)
-                                               if not sp.dm.chain else jnp.ones(U.shape[0])))
-        stacks, states, speed = self._designs(U)
+        stacks, states, speed = self._design_batch(U)
         opts = dict(self.space.dm.built.simulate_options)
         opts.setdefault("max_steps", 16_384)
         sol = simulate_batch(stacks, states, save_steps=True, **opts)
@@ -637,22 +634,12 @@ class _Evaluator:
         return 20.0 * np.log10(np.maximum(s.maximax, 1e-300) / target)
 
     def pulse_objective(self, u) -> float:
-        p = self.problem
-        mt = self.metrics(u)
-        if not mt["ok"]:
-            return 1e3
-        return _objective(p, mt)
+        """The objective of the design at `u` from one solve (the derivative-free SRS path)."""
+        return float(self._pulse_values(self.metrics(u))[0])
 
     def pulse_constraints(self, u) -> np.ndarray:
-        """Constraint values >= 0 where feasible (relative margins)."""
-        p = self.problem
-        mt = self.metrics(u)
-        out = []
-        if p.max_peak_g is not None:
-            out.append(1.0 - mt.get("peak_g", math.inf) / p.max_peak_g if mt["ok"] else -1.0)
-        if p.max_peak_force is not None:
-            out.append(1.0 - mt.get("peak_force", math.inf) / p.max_peak_force if mt["ok"] else -1.0)
-        return np.array(out)
+        """Constraint values >= 0 where feasible (relative margins), from one solve."""
+        return self._pulse_values(self.metrics(u))[1:]
 
 
 def _screen(space: _Space, ev: _Evaluator, problem: OptimizeSpec) -> np.ndarray:
