@@ -85,8 +85,10 @@ _EXPORTS = {
     "mvg_optimal_n_pb": "rigid",
     "stack_gain": "rigid",
     "velocity_gains": "rigid",
+    "RigidBatchResult": "rigid_events",
     "RigidResult": "rigid_events",
     "simulate_rigid": "rigid_events",
+    "simulate_rigid_batch": "rigid_events",
     "BatchSolution": "simulation",
     "Restitution": "simulation",
     "Solution": "simulation",
@@ -196,7 +198,7 @@ if _TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
         stack_gain,
         velocity_gains,
     )
-    from .rigid_events import RigidResult, simulate_rigid
+    from .rigid_events import RigidBatchResult, RigidResult, simulate_rigid, simulate_rigid_batch
     from .simulation import (
         BatchSolution,
         Restitution,

@@ -35,7 +35,7 @@ import numpy as np
 from .episodes import ContactEpisode, contact_episodes, hermite_slope, parabolic_peak, refined_peak
 from .errors import HertzChainError, ParameterError, SolverError
 from .pulse import G0, PulseMetrics, pulse_metrics
-from .rigid import chain_gain, stack_gain
+from .rigid import as_rigid_restitution, chain_gain, stack_gain
 from .rigid_events import simulate_rigid
 from .spectrum import (DEFAULT_PPC, ShockResponseSpectrum, SRSOptions, _active_sample_rate, octave_frequencies,
                   resample_uniform, srs)
@@ -199,19 +199,20 @@ def _rigid_comparison(sol, e_meas, e_nom, v_ref) -> RigidComparison:
         notes.append(f"measured restitution undefined for interface(s) {bad}: no single complete "
                      "contact with a positive approach speed (touching or persistently loaded)")
     else:
-        measured = safe(lambda: closed_form(e_meas), "measured")
+        e_rig = as_rigid_restitution(e_meas)  # an elastic contact's 1 + round-off is 1
+        measured = safe(lambda: closed_form(e_rig), "measured")
         gaps = np.concatenate([[x0[0]], np.diff(x0)])
         gaps = np.maximum(gaps, 0.0)  # a preloaded (overlapping) stack starts touching
-        e_arr = np.where(np.isfinite(e_meas), e_meas, 1.0)
+        e_arr = np.where(np.isfinite(e_rig), e_rig, 1.0)
 
         def run():
             try:
                 res = simulate_rigid(m, v0, gaps, e_arr, ground_restitution=e_arr[0] if ground else None,
-                                     gravity=float(stack.gravity))
+                                     gravity=float(stack.gravity), until="top_launch")
             except SolverError as exc:
-                # Under gravity the lower masses settle after the cascade (collapse or resting contact)
-                # and the run stops with an error; the run so far still holds the top mass's launch if
-                # the top mass had left its neighbour for good (separating at the end).
+                # The run stops once the top's launch is final; where the lower masses settle before
+                # that (collapse or resting contact), it stops with an error, and the run so far still
+                # holds the top mass's launch if the top mass was leaving its neighbour then.
                 res = getattr(exc, "result", None)
                 vf = None if res is None else res.final_velocities
                 if res is None or (n > 1 and not vf[-1] > vf[-2]) or res.n_collisions == 0:

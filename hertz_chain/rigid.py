@@ -33,6 +33,8 @@ from scipy.optimize import brentq
 from .errors import ParameterError
 
 __all__ = [
+    "as_rigid_restitution",
+    "ELASTIC_EXCESS",
     # two-mass impact (Section 2)
     "impact_velocities",
     "velocity_gains",
@@ -262,6 +264,23 @@ def energy_efficiencies(r, g, e):
 
 # --------------------------------------------------------------------------------------------------
 # Sections 3–4: chains and stacks with arbitrary masses
+
+
+#: a measured pair restitution at most this far above 1 is an elastic contact's (the solver's error) and
+#: counts as 1 (`as_rigid_restitution`)
+ELASTIC_EXCESS = 1e-6
+
+
+def as_rigid_restitution(e, first: int = 1):
+    """Measured restitutions `(..., n)` over interfaces as the rigid model takes them: every pair's value
+    (interfaces `first`.., entry 0 being the ground's, which may exceed 1) in `(1, 1 + ELASTIC_EXCESS]` is
+    an elastic contact measured to the solver's error and becomes 1; larger values (a contact that its
+    neighbour pushes apart, separating faster than it approached) are kept, for Eqs 13/19 and
+    `simulate_rigid` to refuse. Returns a new float array."""
+    out = np.array(e, dtype=float)
+    pairs = out[..., max(first, 1):]
+    pairs[(pairs > 1.0) & (pairs <= 1.0 + ELASTIC_EXCESS)] = 1.0
+    return out
 
 
 def chain_gain(masses, restitution):

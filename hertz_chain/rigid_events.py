@@ -57,7 +57,7 @@ import numpy as np
 
 from .errors import ParameterError, SolverError
 
-__all__ = ["RigidResult", "simulate_rigid", "COLLISION_DTYPE"]
+__all__ = ["RigidResult", "RigidBatchResult", "simulate_rigid", "simulate_rigid_batch", "COLLISION_DTYPE"]
 
 COLLISION_DTYPE = np.dtype(
     [("time", "f8"), ("interface", "i8"), ("before", "f8", (2,)), ("after", "f8", (2,))]
@@ -67,6 +67,8 @@ For the ground (interface 0) the lower body is the ground, velocity 0."""
 
 _RTOL_T = 1e-12
 _RTOL_V = 1e-12
+#: what a run goes on until (`simulate_rigid`, `simulate_rigid_batch`)
+UNTIL = ("separated", "top_launch")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -144,6 +146,7 @@ def simulate_rigid(
     *,
     t_max=np.inf,
     max_collisions=100_000,
+    until: str = "separated",
 ) -> RigidResult:
     """Event-driven rigid simulation of a chain (no ground) or a dropped stack (with ground).
 
@@ -152,7 +155,14 @@ def simulate_rigid(
     ground), `gaps[j]` the gap between masses `j` and `j+1`; `restitution` scalar or `(n,)` over
     interfaces (entry 0 unused, see the module rules), each in `[0, 1]` (0: perfectly plastic); `ground_restitution`: None
     (no ground) or `>= 0` (may exceed 1); `gravity` `>= 0` m/s², acting downward; `t_max` s;
-    `max_collisions` a positive integer.
+    `max_collisions` a positive integer; `until`: `"separated"` (the stopping rule of the module
+    docstring) or `"top_launch"`: also stop, normally, as soon as the top mass's launch velocity is final
+    (under gravity, launched upward by an impact, and either its next impact would come after the apex of
+    that flight, which the apex rule makes a rebound, or, on a ground with `e <= 1`, the masses below
+    cannot rise to it before that apex: their energy, which only falls while the top is not hit, is less
+    than `m_{n-1} g` times its height). A dropped stack's lower masses, which go on bouncing on the ground
+    after the top has left (and under gravity often end in a resting contact or an inelastic collapse),
+    are then not followed; the top's launch velocity and time are those of the full run.
 
     Each impact uses Eqs 1–2 of the seed paper (ground: `V_1 = −e_{1,0} v_1`). Contact times are exact
     (linear relative motion between masses, quadratic height of mass 1). Stops when the system
@@ -199,6 +209,8 @@ def simulate_rigid(
     if int(max_collisions) != max_collisions or max_collisions < 1:
         raise ParameterError("max_collisions", max_collisions, "must be a positive integer")
     max_collisions = int(max_collisions)
+    if until not in UNTIL:
+        raise ParameterError("until", until, f"one of {', '.join(UNTIL)}")
 
     v0 = v.copy()
     vtol = _RTOL_V * (np.max(np.abs(v)) if np.any(v) else 1.0)
@@ -269,6 +281,10 @@ def simulate_rigid(
                 f"rigid simulation: bodies approach but no contact is predicted at t = {t:.6g} s after "
                 f"{len(log)} impacts (velocities {v.tolist()}); report this as a bug"
             )
+        if until == "top_launch" and _top_launch_final(
+                m[None], v[None], np.where(np.isfinite(gp), gp, 0.0)[None], launch_v[-1:], launch_t[-1:],
+                np.array([t + dt]), np.array([top_hit]), np.array([g]), np.array([e0]), ground)[0]:
+            break  # the top's launch is final
         if t + dt > t_max:
             raise fail(
                 f"rigid simulation: t_max = {t_max:.6g} s reached (next impact at t = {t + dt:.6g} s) after "
@@ -312,3 +328,227 @@ def simulate_rigid(
         log.append((t, k, before, after))
 
     return result()
+
+
+# --------------------------------------------------------------------------------------------------
+# many stacks at once
+
+
+#: `RigidBatchResult.outcome` codes
+SEPARATED, NO_CONTACT, MAX_COLLISIONS, RESTING_CONTACT, NO_PREDICTION, TOP_LAUNCHED = 0, 1, 2, 3, 4, 5
+
+
+@dataclasses.dataclass(frozen=True)
+class RigidBatchResult:
+    """Result of `simulate_rigid_batch` (SI units), one row per stack.
+
+    * `launch_velocities`, `launch_times`, `final_velocities` `(B, n)`: as in `RigidResult`, for each
+      stack at the end of its run (the run so far where it stopped early).
+    * `n_collisions` `(B,)`; `outcome` `(B,)` int8: `SEPARATED` (0, the normal end), `NO_CONTACT` (1:
+      nothing ever meets), and the ends where `simulate_rigid` raises `SolverError`: `MAX_COLLISIONS`
+      (2), `RESTING_CONTACT` (3), `NO_PREDICTION` (4: bodies approach with no predicted contact, a bug);
+      with `until="top_launch"` also `TOP_LAUNCHED` (5: the top's launch is final, the run stopped there).
+    """
+
+    launch_velocities: np.ndarray
+    launch_times: np.ndarray
+    final_velocities: np.ndarray
+    n_collisions: np.ndarray
+    outcome: np.ndarray
+
+    @property
+    def top_launch_velocities(self) -> np.ndarray:
+        """`(B,)`: the top mass's launch velocity, NaN where the run cannot give one.
+
+        A normal end gives `launch_velocities[:, -1]`. A run that stopped early (the `SolverError` ends
+        of `simulate_rigid`: under gravity the lower masses settle after the cascade) still gives it
+        where the top mass had an impact and was leaving its neighbour when the run stopped
+        (`v_n > v_{n-1}`), the rule of the report's rigid comparison (`analysis`); otherwise NaN.
+        """
+        top = self.launch_velocities[:, -1].copy()
+        stopped = (self.outcome >= MAX_COLLISIONS) & (self.outcome != TOP_LAUNCHED)
+        vf = self.final_velocities
+        leaving = vf[:, -1] > vf[:, -2] if vf.shape[1] > 1 else np.ones(len(vf), dtype=bool)
+        top[stopped & ~(leaving & (self.n_collisions > 0))] = np.nan
+        return top
+
+
+def _contact_times(s, u, a, vtol):
+    """`_contact_time` elementwise (arrays of one shape)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        big_a = -a
+        root = np.sqrt(u * u + 2.0 * big_a * np.maximum(s, 0.0))
+        closed = np.where(u < -vtol, 0.0,
+                          np.where(a < 0.0, np.where(np.abs(u) <= vtol, np.nan, 2.0 * u / big_a), np.inf))
+        linear = np.where(u < -vtol, s / -u, np.inf)
+        quad = np.where(u <= 0.0, 2.0 * s / (root - u), (u + root) / big_a)
+        return np.where(s <= 0.0, closed, np.where(a == 0.0, linear, quad))
+
+
+def _top_launch_final(m, v, gp, lv_top, lt_top, t_next, top_hit, g, e0, ground: bool):
+    """Whether the top mass's launch velocity can no longer change (`(B, n)` rows, or one stack as 1-row
+    arrays): it has had an impact that launched it upward (`lv_top > 0`) under gravity, and either the
+    next impact comes after the apex of that flight (`t_next > lt_top + lv_top / g`: every impact on it
+    from then on lands it, a rebound, the module's apex rule), or, on a ground that adds no energy
+    (`e0 <= 1`), the masses below it cannot reach it before that apex: their energy
+    `E = sum_{j<n} m_j (v_j^2 / 2 + g x_j)` (heights `x_j >= 0` above the ground) never grows while the top
+    is not hit (pair and ground impacts with e <= 1 dissipate, free flight conserves it), so mass n-1
+    never rises above `E / (m_{n-1} g)`, and the top, still rising to its apex, is already above that."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        gs = np.where(g > 0, g, 1.0)
+        launched = top_hit & (g > 0) & (lv_top > 0)
+        final = launched & (t_next > lt_top + lv_top / gs)
+        if ground and m.shape[1] > 1:
+            x = np.cumsum(gp, axis=1)  # heights above the ground
+            energy = np.sum(m[:, :-1] * (0.5 * v[:, :-1] ** 2 + gs[:, None] * x[:, :-1]), axis=1)
+            out_of_reach = m[:, -2] * gs * x[:, -1] > energy * (1.0 + 1e-9)
+            final |= launched & (e0 <= 1.0) & (v[:, -1] > 0) & out_of_reach
+    return final
+
+
+def simulate_rigid_batch(masses, velocities, gaps, restitution, ground_restitution=None, gravity=0.0, *,
+                         max_collisions=100_000, until: str = "separated") -> RigidBatchResult:
+    """`simulate_rigid` of `B` stacks of `n` masses at once, vectorised over the stacks (plain numpy).
+
+    **Arguments** (SI, arrays with a leading batch axis `B`): `masses`, `velocities`, `gaps` `(B, n)` as in
+    `simulate_rigid`; `restitution` `(B, n)` over interfaces (entry 0 unused, pair values in `[0, 1]`);
+    `ground_restitution`: None (no ground, for every stack) or `(B,)` values `>= 0`; `gravity`: a scalar
+    or `(B,)`, `>= 0`; `max_collisions`: impacts after which a run stops (`MAX_COLLISIONS`); `until`:
+    `"separated"` (the end of `simulate_rigid`) or `"top_launch"`: a run also ends (`TOP_LAUNCHED`) as soon
+    as the top mass's launch is final (`simulate_rigid`'s `until`): a dropped stack's lower masses, which
+    keep bouncing on the ground long after the top has left, are not followed. The top's launch velocity and time are those of
+    `simulate_rigid`; the other masses' are those of the run so far.
+
+    **Returns** a `RigidBatchResult`. Each stack follows exactly the rules of `simulate_rigid` (the
+    module docstring: the same closed-form contact times, tie rule, approach floor, ground support,
+    apex rule and stopping rule, the same arithmetic), one loop iteration per impact over the stacks
+    still running; where `simulate_rigid` raises `SolverError`, the run's outcome says why and its
+    state up to there is returned (no `t_max`: a sweep has none).
+
+    **Raises:** `ParameterError` for arrays of the wrong shape or values outside those ranges.
+    """
+    m = np.asarray(masses, dtype=float)
+    if m.ndim != 2 or m.shape[1] < 1:
+        raise ParameterError("masses", m.shape, "a (B, n) array of masses, n >= 1")
+    B, n = m.shape
+    if not np.all(np.isfinite(m) & (m > 0)):
+        raise ParameterError("masses", "non-positive or non-finite", "masses must be finite and > 0")
+    v = np.array(velocities, dtype=float)
+    gp = np.array(gaps, dtype=float)
+    e = np.array(restitution, dtype=float)
+    for name, x in (("velocities", v), ("gaps", gp), ("restitution", e)):
+        if x.shape != (B, n):
+            raise ParameterError(name, x.shape, f"a ({B}, {n}) array, one row per stack")
+    if not np.all(np.isfinite(v)):
+        raise ParameterError("velocities", "non-finite", "finite velocities")
+    if not np.all(np.isfinite(gp) & (gp >= 0)):
+        raise ParameterError("gaps", "negative or non-finite", "finite gaps >= 0")
+    if not np.all(np.isfinite(e[:, 1:]) & (e[:, 1:] >= 0) & (e[:, 1:] <= 1)):
+        raise ParameterError("restitution", "outside [0, 1]", "pair restitutions in [0, 1]")
+    ground = ground_restitution is not None
+    if ground:
+        e0 = np.broadcast_to(np.asarray(ground_restitution, dtype=float), (B,)).copy()
+        if not np.all(np.isfinite(e0) & (e0 >= 0)):
+            raise ParameterError("ground_restitution", "negative or non-finite", "values >= 0 (may exceed 1) or None")
+    else:
+        e0 = np.full(B, np.nan)
+        gp[:, 0] = np.nan
+    g = np.broadcast_to(np.asarray(gravity, dtype=float), (B,)).copy()
+    if not np.all(np.isfinite(g) & (g >= 0)):
+        raise ParameterError("gravity", "negative or non-finite", "finite values >= 0 (acts downward)")
+    if int(max_collisions) != max_collisions or max_collisions < 1:
+        raise ParameterError("max_collisions", max_collisions, "must be a positive integer")
+    if until not in UNTIL:
+        raise ParameterError("until", until, f"one of {', '.join(UNTIL)}")
+
+    vmax = np.max(np.abs(v), axis=1)
+    vtol = _RTOL_V * np.where(vmax > 0, vmax, 1.0)
+    out_lv, out_lt, out_vf = v.copy(), np.zeros((B, n)), v.copy()
+    out_nc, out_code = np.zeros(B, dtype=np.int64), np.full(B, SEPARATED, dtype=np.int8)
+    # the stacks still running, compacted: their index and state
+    idx = np.arange(B)
+    lv, lt, t = v.copy(), np.zeros((B, n)), np.zeros(B)
+    top_hit, nc = np.zeros(B, dtype=bool), np.zeros(B, dtype=np.int64)
+    rows = np.arange(B)
+    while idx.size:
+        # end the runs that separated (after an impact) or failed: write them out, keep the rest
+        sep = nc > 0
+        if n > 1:
+            sep &= ~np.any(np.diff(v, axis=1) < -vtol[:, None], axis=1)
+        if ground:
+            sep &= ~(v[:, 0] < -vtol)
+        cap = ~sep & (nc >= max_collisions)
+        hold = ground & (g > 0) & (gp[:, 0] == 0.0) & (np.abs(v[:, 0]) <= vtol)
+        vh = v.copy()
+        vh[hold, 0] = 0.0
+        times = np.full(v.shape, np.inf)
+        if ground:
+            times[:, 0] = np.where(hold, np.inf, _contact_times(gp[:, 0], vh[:, 0], -g, vtol))
+        if n > 1:
+            acc = np.zeros(v.shape[0:1] + (n - 1,))
+            acc[:, 0] = np.where(hold, -g, 0.0)
+            times[:, 1:] = _contact_times(gp[:, 1:], np.diff(vh, axis=1), acc, vtol[:, None])
+        running = ~sep & ~cap
+        resting = running & np.any(np.isnan(times), axis=1)
+        dt = np.min(np.where(np.isnan(times), np.inf, times), axis=1)
+        never = running & ~resting & ~np.isfinite(dt)
+        no_contact = never & (nc == 0)
+        stuck = never & (nc > 0)
+        final = np.zeros_like(sep)
+        if until == "top_launch":
+            final = running & ~resting & ~never & _top_launch_final(m, vh, gp, lv[:, -1], lt[:, -1], t + dt, top_hit,
+                                                                     g, e0, ground)
+        end = sep | cap | resting | never | final
+        if np.any(end):
+            i = idx[end]
+            out_lv[i], out_lt[i], out_nc[i] = lv[end], lt[end], nc[end]
+            out_vf[i] = np.where(resting[end, None] | never[end, None], vh[end], v[end])
+            out_code[i] = np.select([cap[end], resting[end], no_contact[end], stuck[end], final[end]],
+                                    [MAX_COLLISIONS, RESTING_CONTACT, NO_CONTACT, NO_PREDICTION, TOP_LAUNCHED],
+                                    SEPARATED)
+            keep = ~end
+            idx, v, vh, gp, lv, lt, t = idx[keep], v[keep], vh[keep], gp[keep], lv[keep], lt[keep], t[keep]
+            top_hit, nc, hold, times, dt = top_hit[keep], nc[keep], hold[keep], times[keep], dt[keep]
+            m, e, e0, g, vtol = m[keep], e[keep], e0[keep], g[keep], vtol[keep]
+            if not idx.size:
+                break
+        v = vh
+        r = rows[: idx.size]
+        k = np.argmax(times <= (dt + _RTOL_T * (t + dt))[:, None], axis=1)  # the lowest simultaneous interface
+        # free flight for dt
+        move = dt > 0
+        dtm = np.where(move, dt, 0.0)
+        if n > 1:
+            gp[:, 1:] = np.where(move[:, None], gp[:, 1:] + np.diff(v, axis=1) * dtm[:, None], gp[:, 1:])
+            gp[:, 1] = np.where(move & hold, gp[:, 1] - 0.5 * g * dtm * dtm, gp[:, 1])
+        if ground:
+            gp[:, 0] = np.where(move & ~hold, gp[:, 0] + (v[:, 0] * dtm - 0.5 * g * dtm * dtm), gp[:, 0])
+        fall = np.where(move[:, None], g[:, None] * dtm[:, None], 0.0)
+        if n > 1:
+            v[:, 1:] = v[:, 1:] - fall
+        v[:, 0] = np.where(hold, v[:, 0], v[:, 0] - fall[:, 0])
+        t = np.where(move, t + dtm, t)
+        gp = np.where(move[:, None] & np.isfinite(gp), np.maximum(gp, 0.0), gp)
+        gp[r, k] = 0.0
+        # the impact at interface k (Eqs 1-2; the ground: V_1 = -e_{1,0} v_1)
+        on_ground = k == 0
+        a_, b_ = np.maximum(k - 1, 0), np.maximum(k, 1) if n > 1 else np.zeros_like(k)
+        if n > 1:
+            va, vb = v[r, a_], v[r, b_]
+            landed = ((k == n - 1) & (g > 0) & top_hit & (lv[:, -1] > 0)
+                      & (t > lt[:, -1] + lv[:, -1] / np.where(g > 0, g, 1.0)))
+            dv = (1.0 + e[r, b_]) * (vb - va) / (m[r, a_] + m[r, b_])
+            na, nb = va + m[r, b_] * dv, vb - m[r, a_] * dv
+            pair = ~on_ground
+            v[r[pair], a_[pair]], v[r[pair], b_[pair]] = na[pair], nb[pair]
+            upd = pair & ~landed
+            lv[r[upd], a_[upd]], lv[r[upd], b_[upd]] = na[upd], nb[upd]
+            lt[r[upd], a_[upd]] = t[upd]
+            lt[r[upd], b_[upd]] = t[upd]
+            top_hit |= upd & (k == n - 1)
+        if ground:
+            gr = r[on_ground]
+            v[gr, 0] = -e0[on_ground] * v[gr, 0]
+            lv[gr, 0], lt[gr, 0] = v[gr, 0], t[on_ground]
+        nc = nc + 1
+    return RigidBatchResult(_ro(out_lv), _ro(out_lt), _ro(out_vf), _ro(out_nc), _ro(out_code))

@@ -220,3 +220,104 @@ def test_perfectly_plastic_impact_sticks():
     r = simulate_rigid([3.0, 1.0], [2.0, 0.0], [0.0, 0.01], 0.0)  # no ground: gaps[0] unused
     assert r.n_collisions == 1
     np.testing.assert_allclose(r.final_velocities, [1.5, 1.5], rtol=1e-15)
+
+
+@pytest.mark.parametrize("until", ["separated", "top_launch"])
+@pytest.mark.parametrize("n", [1, 3, 5])
+def test_batch_runs_every_stack_as_simulate_rigid_does(n, until):
+    """`simulate_rigid_batch` against `simulate_rigid` run on each stack alone (the reference, itself
+    checked above against Eqs 13/19 and the closed forms): random stacks with and without a ground,
+    with and without gravity, touching and gapped interfaces, plastic to elastic pairs, an active ground;
+    every launch velocity and time, final velocity and impact count identical (the same arithmetic), and
+    every end where `simulate_rigid` raises `SolverError` (resting contact, the impact cap) given as the
+    outcome, with the run up to there; both run until the system separates, or until the top's launch is
+    final."""
+    from hertz_chain.rigid_events import (MAX_COLLISIONS, RESTING_CONTACT, SEPARATED, TOP_LAUNCHED,
+                                          simulate_rigid_batch)
+
+    rng = np.random.default_rng(11 + n)
+    seen = set()
+    for ground in (True, False):
+        for g in (0.0, 9.80665):
+            B = 80
+            m = np.sort(np.exp(rng.uniform(-3, 0, (B, n))), axis=1)[:, ::-1].copy()
+            v = np.full((B, n), -rng.uniform(0.5, 5, (B, 1))) if ground else \
+                np.concatenate([rng.uniform(0.5, 5, (B, 1)), np.zeros((B, n - 1))], axis=1)
+            gaps = np.where(rng.uniform(size=(B, n)) < 0.3, 0.0, 10 ** rng.uniform(-6, -2, (B, n)))
+            e = np.where(rng.uniform(size=(B, n)) < 0.2, 1.0, rng.uniform(0, 1, (B, n)))
+            e0 = rng.uniform(0.2, 1.2, B) if ground else None
+            res = simulate_rigid_batch(m, v, gaps, e, e0, g, max_collisions=300, until=until)
+            for i in range(B):
+                try:
+                    ref, code = simulate_rigid(m[i], v[i], gaps[i], e[i], None if e0 is None else e0[i], g,
+                                               max_collisions=300, until=until), SEPARATED
+                except SolverError as exc:
+                    ref = exc.result
+                    code = MAX_COLLISIONS if "max_collisions" in str(exc) else RESTING_CONTACT
+                if code == SEPARATED and ref.n_collisions == 0:
+                    code = 1  # NO_CONTACT
+                if code == SEPARATED and int(res.outcome[i]) == TOP_LAUNCHED:
+                    code = TOP_LAUNCHED  # simulate_rigid returns normally there
+                seen.add(code)
+                assert int(res.outcome[i]) == code
+                assert int(res.n_collisions[i]) == ref.n_collisions
+                np.testing.assert_array_equal(res.launch_velocities[i], ref.launch_velocities)
+                np.testing.assert_array_equal(res.launch_times[i], ref.launch_times)
+                np.testing.assert_array_equal(res.final_velocities[i], ref.final_velocities)
+    if n == 5:  # the early ends were exercised
+        assert {SEPARATED, MAX_COLLISIONS, RESTING_CONTACT} <= seen if until == "separated" else TOP_LAUNCHED in seen
+
+
+def test_a_run_until_the_top_launch_gives_the_full_runs_top_launch_in_fewer_impacts():
+    """Dropped five-mass MVG stacks (paper Eq 15, R = 0.05 and 0.2) under gravity, gaps 1 um to 1 cm, e from
+    0.5 to 1: stopping once the top's launch is final (past its apex, or out of the lower masses' reach by
+    their energy) gives the top launch velocity and time of the full run (the reference: the run until
+    the system separates) exactly, wherever the full run separates, in fewer impacts."""
+    from hertz_chain.rigid_events import SEPARATED, TOP_LAUNCHED, simulate_rigid_batch
+
+    rng = np.random.default_rng(3)
+    B, n = 256, 5
+    for R in (0.05, 0.2):
+        m = np.tile(rigid.mvg_masses(R, n), (B, 1))
+        gaps = np.tile(10 ** rng.uniform(-6, -2, (B, 1)), (1, n))
+        gaps[:, 0] = 0.0
+        v = np.full((B, n), -2.0)
+        e = np.repeat(rng.choice([0.5, 0.8, 0.95, 1.0], (B, 1)), n, axis=1)
+        full = simulate_rigid_batch(m, v, gaps, e, e[:, 0], 9.80665)
+        top = simulate_rigid_batch(m, v, gaps, e, e[:, 0], 9.80665, until="top_launch")
+        sep = full.outcome == SEPARATED
+        assert sep.sum() > B // 2 and np.sum(top.outcome == TOP_LAUNCHED) > B // 10
+        np.testing.assert_array_equal(top.launch_velocities[sep, -1], full.launch_velocities[sep, -1])
+        np.testing.assert_array_equal(top.launch_times[sep, -1], full.launch_times[sep, -1])
+        assert np.all(top.n_collisions <= full.n_collisions)
+
+
+def test_batch_top_launch_follows_the_reports_rule_for_runs_that_stop_early():
+    """A run that stops (impact cap) keeps the top's launch only while the top leaves its neighbour, as
+    the report's rigid comparison does (`analysis`): McNamara & Young's collapsing three-body line
+    (e = 0.05 < 7 - 4 sqrt 3), whose impacts alternate 1-2, 2-3 (the 1-2 gap closes first): stopped
+    after 19 impacts (the last 1-2, so 2 closes on 3) it keeps no launch; after 20 (the last 2-3) it
+    keeps the top's velocity after that impact. A two-mass drop that separates keeps its launch, Eq 19
+    (e0 = 1, e = 1, r = 1/2: G = 2 (2/1.5) - 1 = 5/3)."""
+    from hertz_chain.rigid_events import MAX_COLLISIONS, simulate_rigid_batch
+
+    for cap in (19, 20):
+        line = simulate_rigid_batch([[1.0, 1.0, 1.0]], [[1.0, 0.0, -1.0]], [[0.0, 0.1, 0.2]],
+                                    [[1.0, 0.05, 0.05]], max_collisions=cap)
+        assert int(line.outcome[0]) == MAX_COLLISIONS and int(line.n_collisions[0]) == cap
+        vf = line.final_velocities[0]
+        if cap == 19:
+            assert vf[2] < vf[1] and np.isnan(line.top_launch_velocities[0])
+        else:
+            assert vf[2] > vf[1] and line.top_launch_velocities[0] == vf[2]
+    drop = simulate_rigid_batch([[1.0, 0.5]], [[-1.0, -1.0]], [[0.0, 0.0]], [[1.0, 1.0]], [1.0])
+    assert drop.top_launch_velocities[0] == pytest.approx(5.0 / 3.0, rel=1e-14)
+
+
+def test_batch_bad_input_names_the_parameter():
+    from hertz_chain.rigid_events import simulate_rigid_batch
+
+    with pytest.raises(ParameterError, match="restitution"):
+        simulate_rigid_batch([[1.0, 0.5]], [[-1.0, -1.0]], [[0.0, 0.0]], [[1.0, 1.2]], [1.0])
+    with pytest.raises(ParameterError, match="gaps"):
+        simulate_rigid_batch([[1.0, 0.5]], [[-1.0, -1.0]], [[0.0]], [[1.0, 1.0]], [1.0])
