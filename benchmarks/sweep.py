@@ -10,7 +10,9 @@ gravity) swept over the gap (log, 1e-6..1e-2 m) and the contact stiffness (log, 
    markers); both warm.
 2. **Designs per second and the extrapolation to 10^6 designs** (issue 20's budget: under 10 min on 2
    cores), with the peak resident memory of the process.
-3. **Local Dask workers**: designs per second with `--workers 1` and `2` (and `4`, oversubscribing a
+3. **The 10 % durations** (`[sweep] durations = true`): the same sweep end to end with the top pulse
+   streamed through the solve, warm.
+4. **Local Dask workers**: designs per second with `--workers 1` and `2` (and `4`, oversubscribing a
    2-core machine), each worker one single-device process.
 """
 
@@ -90,6 +92,18 @@ def main(argv=None) -> int:
     full = time.perf_counter() - t
     rss_gb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
 
+    doc = _doc(args.designs, args.chunk)
+    doc["sweep"]["durations"] = True
+    dpath = tmp / "durations.toml"
+    dpath.write_text(tomli_w.dumps(doc))
+    sweep(dpath, tmp / "dwarm.zarr")  # compiles the streamed solve
+    t = time.perf_counter()
+    dres = sweep(dpath, tmp / "durations.zarr")
+    with_durations = time.perf_counter() - t
+    import xarray as xr
+
+    d10 = xr.open_zarr(tmp / "durations.zarr", consolidated=False).top_duration_10.values
+
     rows = []
     for workers in [int(w) for w in args.workers.split(",") if w]:
         out = tmp / f"w{workers}.zarr"
@@ -107,7 +121,11 @@ def main(argv=None) -> int:
              "| path | wall (s) | designs/s |", "|---|---|---|",
              f"| bare `simulate_batch(save_steps=False)`, same chunks | {bare:.1f} | {n / bare:.0f} |",
              f"| `sweep` end to end (Zarr, markers, Eq 19) | {full:.1f} | {rate:.0f} |",
-             f"| overhead | {100 * (full / bare - 1):.1f} % | |", "",
+             f"| overhead | {100 * (full / bare - 1):.1f} % | |",
+             f"| `sweep` with `durations = true` | {with_durations:.1f} | {n / with_durations:.0f} |",
+             f"| cost of the durations | {100 * (with_durations / full - 1):.1f} % | |", "",
+             f"With `durations = true`, {np.isfinite(d10).sum()} of {d10.size} designs have a 10 % duration "
+             f"(status counts {dres.status_counts}).", "",
              "## Scale", "",
              f"- Extrapolated to 10^6 designs at this rate: {1e6 / rate / 60:.1f} min (issue 20's budget: 10 min).",
              f"- Peak resident memory of the process: {rss_gb:.2f} GB (budget 2 GB).", "",

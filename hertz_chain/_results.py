@@ -113,7 +113,11 @@ class BatchSolution:
     the fixed ground it changes by up to g h within a step h; a neighbour's contact acting within that
     step also shifts it); NaN without a finished contact; `first_contacts (B, n, 2)`: the first accepted
     points in and after each interface's first contact (s; within a step of its start and end; NaN
-    without one); all four None with a step history (analyse a design instead).
+    without one); `top_duration_10 (B,)`: the top mass's pulse duration between its 10 % points
+    (`pulse.pulse_metrics`'s `duration_10` on the accelerometer sampled at the accepted points of the
+    first cascade, streamed through the solve; NaN without a pulse, for a pulse still above 10 % at the
+    end, or a rising edge of more than 64 steps above the 10 % level); all five None with a step history
+    (analyse a design instead).
     """
 
     status_code: np.ndarray
@@ -136,6 +140,7 @@ class BatchSolution:
     impact_velocities: np.ndarray | None = None
     restitutions: np.ndarray | None = None
     first_contacts: np.ndarray | None = None
+    top_duration_10: np.ndarray | None = None
 
     @property
     def ok(self) -> np.ndarray:

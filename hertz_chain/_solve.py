@@ -28,6 +28,7 @@ from ._tracking import (
     V_UPPER_BEFORE,
     _cascade_complete,
     _end_of_contacts,
+    _pulse_duration,
     _launch,
     _Tracked,
 )
@@ -103,7 +104,7 @@ def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _SolveConfig, hist
     subs.append(dfx.SubSaveAt(t1=True))
     return dfx.diffeqsolve(
         dfx.ODETerm(_scaled_field),
-        _Tracked.around(cfg.solver, cfg.adjoint, audit=audit, launch=cfg.until == "launch"),
+        _Tracked.around(cfg.solver, cfg.adjoint, audit=audit, launch=cfg.until == "launch", durations=cfg.durations),
         t0=0.0,
         t1=t1s,
         dt0=cfg.tolerances.first_step,
@@ -208,6 +209,9 @@ def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _SolveConfig, launch
         out["restitutions"] = jnp.where(ok, release / jnp.where(ok, approach, 1.0), jnp.nan)
         # the first contact of every interface, [first point in it, first point after it] (s; step-resolved)
         out["first_contacts"] = jnp.stack([pk[T_FIRST_IN], pk[T_FIRST_OUT]], axis=-1) * sc.time
+        # the top pulse's 10 % duration at the steps (NaN: no pulse, not ended, or a rising edge too long to follow)
+        if contacts.pulse is not None:
+            out["top_duration_10"] = _pulse_duration(*contacts.pulse, pk[PEAK_FORCE, -1]) * sc.time
     if ts is not None:
         grid = _derived(stack, sol.ys[int(cfg.save_steps)][:, :n3] * scale[None, :])
         grid["t"] = ts

@@ -142,3 +142,5 @@ class _SolveConfig(eqx.Module):
     adjoint: Any
     save_steps: bool = eqx.field(static=True)
     until: str = eqx.field(static=True, default="cascade")
+    #: without a step history, also stream the top pulse's 10 % duration (`simulate_batch(pulse_durations=True)`)
+    durations: bool = eqx.field(static=True, default=False)

@@ -131,6 +131,81 @@ T_IN, T_OUT, DELTA_OUT, RATE_OUT, V_LOWER_OUT, V_UPPER_OUT, Q_OUT = range(7)
  T_FIRST_OUT) = range(7)
 
 
+#: slots for the top pulse's samples (`_pulse_update`: a rising edge takes one per sample, a fall or a
+#: stretch below the 10 % level one or two); where the samples from its start to its peak do not fit, the
+#: duration is NaN
+PULSE_RING = 256
+#: the level of the pulse duration, a fraction of the peak (the shock-test standards' 10 % points)
+PULSE_LEVEL = 0.1
+# entries of the pulse's running values
+P_COUNT, P_AT_PEAK, P_END, P_PENDING, P_T_PREV, P_Y_PREV, P_PREV_BELOW, P_PREV_FALL = range(8)
+
+
+def _cross(t0, y0, t1, y1, level):
+    """Where the line from `(t0, y0)` to `(t1, y1)` reaches `level` (the two samples bracket it)."""
+    return t0 + (level - y0) / jnp.where(y1 != y0, y1 - y0, 1.0) * (t1 - t0)
+
+
+def _pulse_start(t, y):
+    """The running values of `_pulse_update` before the first sample."""
+    return (jnp.full((2, PULSE_RING + 1), jnp.nan, dtype=y.dtype),
+            jnp.stack([0.0 * y, 0.0 * y, jnp.nan * y, 0.0 * y, t + 0.0 * y, y, 0.0 * y, 0.0 * y]))
+
+
+def _pulse_update(ring, run, t, y, peak, frozen):
+    """One sample `(t, y)` of a pulse `y(t) >= 0` whose largest sample so far (before this one) is `peak`,
+    streamed through the main pulse's ends at `PULSE_LEVEL` of its peak, as `pulse.pulse_metrics` finds
+    them on the whole record (its linear interpolant: the maximal interval around the first largest
+    sample over which `y >= PULSE_LEVEL * peak`):
+
+    - the end: after each new peak, the first sample below the level, interpolated from the one before;
+    - the start (`_pulse_duration`, after the solve): the last sample `j` before the peak below the level,
+      and the sample after it. `ring` holds the samples in order, one slot each, except that a sample
+      replaces the one before it where that one can be neither such a `j` (a later sample is lower, or
+      also below the level, which only rises) nor the sample after one (that sample rose from `j`): after
+      a sample below the level, a sample below it; after a fall, a further fall. So a rising edge takes a
+      slot per sample, a fall or a stretch below the level one or two.
+
+    `run`: `[slots used, slot of the peak, end, pending, t_prev, y_prev, prev below, prev fall]`; `frozen`:
+    keep everything. Few and elementwise operations (each is a kernel of its own in every step of the
+    solver's loop); `ring`, in the solver's state, passes through diffrax's accept/reject select every
+    step, so its cost grows with `PULSE_RING`."""
+    new_peak = (y > peak) & ~frozen
+    level = PULSE_LEVEL * jnp.maximum(peak, y)
+    below = y < level
+    fall = y <= run[P_Y_PREV]
+    again = (below & (run[P_PREV_BELOW] > 0)) | (fall & (run[P_PREV_FALL] > 0))  # replace the previous sample
+    pos = run[P_COUNT] - again
+    k = ring.shape[1] - 1  # the last column takes the writes of a frozen pulse
+    slot = jnp.where(frozen, k, jnp.mod(pos, k)).astype(jnp.int32)
+    ring = jax.lax.dynamic_update_slice(ring, jnp.stack([t, y])[:, None], (jnp.zeros_like(slot), slot))
+    down = (run[P_PENDING] > 0) & ~new_peak & below & ~frozen
+    run = jnp.where(frozen, run, jnp.stack([
+        pos + 1.0, jnp.where(new_peak, pos, run[P_AT_PEAK]),
+        jnp.where(down, _cross(run[P_T_PREV], run[P_Y_PREV], t, y, level), jnp.where(new_peak, jnp.nan, run[P_END])),
+        jnp.where(new_peak, 1.0, jnp.where(down, 0.0, run[P_PENDING])), t, y, below.astype(y.dtype),
+        fall.astype(y.dtype)]))
+    return ring, run
+
+
+def _pulse_duration(ring, run, peak):
+    """The main pulse's duration at `PULSE_LEVEL` from `_pulse_update`'s values after the last sample
+    (one pulse): NaN without a pulse, while it is still above the level at the end, or where the samples
+    from its start to its peak are no longer all in the ring."""
+    k = ring.shape[-1] - 1
+    back = jnp.arange(k)  # slots back from the peak
+    p = run[P_AT_PEAK] - back  # their positions
+    idx = jnp.mod(p, k).astype(jnp.int32)
+    t, y = ring[0][idx], ring[1][idx]
+    level = PULSE_LEVEL * peak
+    kept = (p >= 0) & (p >= run[P_COUNT] - k)  # written, and not overwritten since
+    below = kept & (y < level)
+    j = jnp.argmax(below)  # the latest sample before the peak below the level (j >= 1)
+    start = _cross(t[j], y[j], t[j - 1], y[j - 1], level)
+    ok = jnp.any(below) & (run[P_PENDING] == 0) & (peak > 0)
+    return jnp.where(ok, run[P_END] - start, jnp.nan)
+
+
 class _Contacts(eqx.Module):
     """Per-interface bookkeeping of the accepted steps, carried in the solver state (`_Tracked`), so
     that launch velocities and the energy audit need no step history (a history of `max_steps` rows is
@@ -164,9 +239,11 @@ class _Contacts(eqx.Module):
     energy: tuple[Array, Array] | None
     acc: Array
     peaks: Array | None = None
+    pulse: tuple[Array, Array] | None = None
 
     @staticmethod
-    def update(c: _Contacts | None, t, ys, args, audit: bool, launch: bool = False, dys=None) -> _Contacts:
+    def update(c: _Contacts | None, t, ys, args, audit: bool, launch: bool = False, dys=None,
+               durations: bool = False) -> _Contacts:
         """The bookkeeping after the accepted point `(t, ys)` (scaled); `dys`: the scaled derivative
         there (`_scaled_field`; None at `t0`, where no contact has ended)."""
         stack, scale = args.stack, args.scale
@@ -186,7 +263,8 @@ class _Contacts(eqx.Module):
                           active & False, jnp.concatenate([jnp.zeros(4), v_top[None], ys[n : 2 * n]]),
                           None if e is None else (e, 0.0 * e), acc,
                           None if e is None else jnp.stack([0.0 * d, v, jnp.concatenate([jnp.zeros(1, v.dtype), v[:-1]]),
-                                                            jnp.nan * d, jnp.nan * d, jnp.nan * d, jnp.nan * d]))
+                                                            jnp.nan * d, jnp.nan * d, jnp.nan * d, jnp.nan * d]),
+                          _pulse_start(jnp.asarray(t, d.dtype), 0.0 * d[-1]) if durations else None)
         was_over, top_done = c.cascade[0] > 0, c.cascade[3] > 0
         frozen = was_over | ((jnp.arange(n) == n - 1) & top_done)
         left = c.now & ~active
@@ -207,7 +285,7 @@ class _Contacts(eqx.Module):
         head = jnp.stack([(was_over | over), rebound, jnp.where(over, t[0], c.cascade[2]),
                           top_done | apex | over, v_top]).astype(d.dtype)
         cascade = jnp.concatenate([head, jnp.where(over, ys[n : 2 * n], c.cascade[5:])])
-        peaks = None
+        peaks = pulse = None
         if e is not None:  # elementwise, not `.at[].max`: a scatter is a slow unfused operation in the loop
             e = (c.energy[0], jnp.maximum(c.energy[1], jnp.abs(e - c.energy[0])))
             f = jnp.where(active, stack.forces(d, dd, q), 0.0)
@@ -219,7 +297,9 @@ class _Contacts(eqx.Module):
                                jnp.where(never, v, pk[V_UPPER_BEFORE]), jnp.where(never, v_lo, pk[V_LOWER_BEFORE]),
                                jnp.where(first_off, v, pk[V_UPPER_AFTER]), jnp.where(first_off, v_lo, pk[V_LOWER_AFTER]),
                                jnp.where(first_on & ~frozen, t, pk[T_FIRST_IN]), jnp.where(first_off, t, pk[T_FIRST_OUT])])
-        return _Contacts(rows, now, cascade, e, acc, peaks)
+            if durations:  # the top's accelerometer times m_n
+                pulse = _pulse_update(*c.pulse, t[0], f[n - 1], pk[PEAK_FORCE, n - 1], frozen[n - 1])
+        return _Contacts(rows, now, cascade, e, acc, peaks, pulse)
 
 
 class _Tracked(dfx.AbstractWrappedSolver):
@@ -230,10 +310,11 @@ class _Tracked(dfx.AbstractWrappedSolver):
     solver: dfx.AbstractSolver
     audit: bool = eqx.field(static=True)
     launch: bool = eqx.field(static=True, default=False)
+    durations: bool = eqx.field(static=True, default=False)
 
     @classmethod
     def around(cls, solver: dfx.AbstractSolver, adjoint: dfx.AbstractAdjoint, audit: bool,
-               launch: bool = False) -> _Tracked:
+               launch: bool = False, durations: bool = False) -> _Tracked:
         # diffrax's ForwardMode and DirectAdjoint set `scan_kind` of a Runge–Kutta solver left at None
         # ("lax", "bounded") by `eqx.tree_at`, which cannot reach through the wrapper: do it here.
         # (RecursiveCheckpointAdjoint leaves it None: the stages' loop is then "checkpointed", faster.)
@@ -241,7 +322,7 @@ class _Tracked(dfx.AbstractWrappedSolver):
         kind = next((k for cls_, k in kinds.items() if isinstance(adjoint, cls_)), None)
         if kind is not None and getattr(solver, "scan_kind", "") is None:
             solver = eqx.tree_at(lambda s: s.scan_kind, solver, kind, is_leaf=lambda x: x is None)
-        return cls(solver, audit, launch)
+        return cls(solver, audit, launch, durations and audit)
 
     @property
     def scan_kind(self):
@@ -273,7 +354,7 @@ class _Tracked(dfx.AbstractWrappedSolver):
         return self.solver.error_order(terms)
 
     def init(self, terms, t0, t1, y0, args):
-        return self.solver.init(terms, t0, t1, y0, args), _Contacts.update(None, t0, y0, args, self.audit, self.launch)
+        return self.solver.init(terms, t0, t1, y0, args), _Contacts.update(None, t0, y0, args, self.audit, self.launch, None, self.durations)
 
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
         inner, contacts = solver_state
@@ -281,7 +362,7 @@ class _Tracked(dfx.AbstractWrappedSolver):
         # the derivative at the step's end: the first-same-as-last stage of the default solver
         # (`UnrolledTsit5`'s state is f(t1, y1)), else one more evaluation
         dys = inner if isinstance(inner, jax.Array) and inner.shape == y1.shape else terms.vf(t1, y1, args)
-        contacts = _Contacts.update(contacts, t1, y1, args, self.audit, self.launch, dys)
+        contacts = _Contacts.update(contacts, t1, y1, args, self.audit, self.launch, dys, self.durations)
         # the cascade-over flag, read by the stopping event (`_scaled_field`); its derivative is zero, so
         # its error estimate is zero already
         y1 = y1.at[-1].set(contacts.cascade[0])

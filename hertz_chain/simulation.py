@@ -238,6 +238,7 @@ def simulate_batch(
     max_steps: int = 4096,
     save_steps: bool = True,
     until: str = "cascade",
+    pulse_durations: bool = False,
 ) -> BatchSolution:
     """Simulate a batch of designs of one structure in one compiled, vmapped solve.
 
@@ -254,8 +255,19 @@ def simulate_batch(
     is flagged "incomplete: max_steps reached"). With several JAX devices (every CPU core is one:
     module docstring, "Batches") the designs are split over them. `until` as for `simulate`. Costs per
     design are measured in `benchmarks/` (`make bench`).
+
+    `pulse_durations=True` (with `save_steps=False`) also streams the top mass's pulse through the solve
+    for its 10 % duration (`BatchSolution.top_duration_10`): the last 256 samples of the pulse are kept
+    per design, and every step's state passes through diffrax's accept/reject select, so it costs about
+    20 % per step (measured: five-mass Tsuji designs, `benchmarks/sweep.md`). Raises `ParameterError`
+    with `save_steps=True` (analyse a design's history instead).
     """
+    if pulse_durations and save_steps:
+        raise ParameterError("pulse_durations", True, "only with save_steps=False (with a step history, "
+                             "analyse the design: its pulse metrics have the durations)")
     ts, t_max, cfg = _prepare(stacks, states, ts, t_max, solver, tolerances, max_steps, None, save_steps, until)
+    if pulse_durations:
+        cfg = dataclasses.replace(cfg, durations=True)
     if getattr(cfg.solver, "scan_kind", "") is None:
         # Runge–Kutta stages as a "bounded" loop: 15 % faster per design under vmap, but 50 % slower
         # for a single solve than diffrax's default (measured, Tsit5, 5 and 10 masses)
@@ -291,6 +303,7 @@ def simulate_batch(
         impact_velocities=np_(out["impact_velocities"]) if "impact_velocities" in out else None,
         restitutions=np_(out["restitutions"]) if "restitutions" in out else None,
         first_contacts=np_(out["first_contacts"]) if "first_contacts" in out else None,
+        top_duration_10=np_(out["top_duration_10"]) if "top_duration_10" in out else None,
     )
 
 

@@ -60,7 +60,7 @@ __all__ = ["SweepSpec", "AxisSpec", "SweepResult", "read_sweep_file", "check", "
 COMBINE = ("product", "zip")
 SAMPLES = ("sobol", "lhs", "montecarlo")
 DISTRIBUTIONS = ("normal", "uniform")
-_SWEEP_KEYS = ("combine", "sample", "samples", "seed", "chunk", "axis")
+_SWEEP_KEYS = ("combine", "sample", "samples", "seed", "chunk", "durations", "axis")
 _AXIS_KEYS = ("key", "index", "values", "space", "start", "stop", "num", "bounds", "distribution", "std")
 MAX_DESIGNS = 100_000_000
 VARIABLES = {  # name -> (units, long name)
@@ -83,6 +83,8 @@ VARIABLES = {  # name -> (units, long name)
     "top_peak_g": ("1", "peak of the top mass's accelerometer (a + g), in units of standard gravity (9.80665 m s-2)"),
     "top_delta_v": ("m s-1", "velocity change of the top mass: launch velocity minus its velocity before its first contact"),
     "top_equivalent_half_sine": ("s", "duration of the half-sine with the top pulse's peak and velocity change"),
+    "top_duration_10": ("s", "duration of the top pulse between its 10 % points, at the solver's steps (NaN unless "
+                        "[sweep] durations = true)"),
     "restitution": ("1", "effective restitution of the interface's first contact: separation over approach speed"),
     "overlap_fraction": ("1", "largest fraction of the shorter first contact during which two neighbouring "
                          "interfaces are both closed (0: sequential; step-resolved)"),
@@ -123,6 +125,7 @@ class SweepSpec:
     samples: int = 0
     seed: int = 0
     chunk: int = 1024
+    durations: bool = False
 
 
 def _err(key: str, problem: str) -> StackFileError:
@@ -203,6 +206,10 @@ def parse_sweep(raw: Any, spec: StackSpec) -> SweepSpec:
             if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
                 raise _err(f"sweep.{k}", f"{v!r} is invalid: an integer from {lo} to {hi}")
             out[k] = v
+    if "durations" in raw:
+        if not isinstance(raw["durations"], bool):
+            raise _err("sweep.durations", f"{raw['durations']!r} is invalid: true or false")
+        out["durations"] = raw["durations"]
     if sample is not None and "samples" not in out:
         raise _err("sweep.samples", f"missing; sample = '{sample}' needs the number of samples")
     if sample is None and "samples" in out:
@@ -388,7 +395,7 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
     stacks, states = designs(X)
     opts = {k: v for k, v in dm.built.simulate_options.items() if k in ("solver", "tolerances", "t_max", "until")}
     sol = simulate_batch(stacks, states, save_steps=False, max_steps=dm.built.simulate_options.get("max_steps", 16_384),
-                         **opts)
+                         pulse_durations=plan.sweep.durations, **opts)
     fields = fields_of(X)
     speed = np.asarray(fields["drop.impact_velocity"]) if not dm.chain else \
         np.full(len(X), dm.drop_speed(None))
@@ -422,6 +429,7 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
            "rigid_gain_event_driven": rigid_event, "energy_error": sol.energy_error,
            "num_steps": sol.num_steps.astype(np.int64), "t_final": sol.t_final,
            "peak_force": sol.peak_forces, "top_peak_g": peak_a / G0, "top_delta_v": dv, "top_equivalent_half_sine": eq_hs,
+           "top_duration_10": sol.top_duration_10 if plan.sweep.durations else np.full(len(X), np.nan),
            "restitution": sol.restitutions, "overlap_fraction": overlap,
            "regime": (overlap >= INDEPENDENT_BELOW).astype(np.int8)}
     if plan.dims == ("design",):
@@ -433,8 +441,8 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
         out["status"] = np.where(valid, out["status"], np.int8(Status.FAILED)).astype(np.int8)
         for k in ("top_velocity_gain", "velocity_gains", "rigid_gain", "rigid_deficit", "rigid_gain_measured",
                   "rigid_gain_event_driven", "energy_error", "t_final",
-                  "peak_force", "top_peak_g", "top_delta_v", "top_equivalent_half_sine", "restitution",
-                  "overlap_fraction"):
+                  "peak_force", "top_peak_g", "top_delta_v", "top_equivalent_half_sine", "top_duration_10",
+                  "restitution", "overlap_fraction"):
             out[k] = np.where(valid.reshape((-1,) + (1,) * (out[k].ndim - 1)), out[k], np.nan)
         out["num_steps"] = np.where(valid, out["num_steps"], 0)
         out["regime"] = np.where(valid, out["regime"], -1).astype(np.int8)
@@ -651,7 +659,8 @@ def _rate_key(plan: _Plan, workers: int | None, scheduler: str | None) -> str:
     laws = sorted({spec.contact_for(j).law for j in range(0 if spec.has_ground else 1, n)})
     where = (f"dask:{scheduler}" if scheduler else f"workers:{workers}" if workers
              else f"{jax.default_backend()}:{jax.local_device_count()}")
-    return f"{where}|n={n}|{','.join(laws)}|ground={spec.has_ground}|chunk={plan.chunk_rows * plan.row}"
+    return (f"{where}|n={n}|{','.join(laws)}|ground={spec.has_ground}|chunk={plan.chunk_rows * plan.row}"
+            + ("|durations" if plan.sweep.durations else ""))
 
 
 def _rates_path() -> Path | None:

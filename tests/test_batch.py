@@ -50,6 +50,9 @@ def test_batch_equals_individual_and_isolates_failure():
         assert lean.design(i).steps is None
     with pytest.raises(ParameterError, match="step history"):
         analyse(lean.design(0))
+    assert lean.top_duration_10 is None  # streamed only when asked for
+    with pytest.raises(ParameterError, match="pulse_durations.*save_steps=False"):
+        simulate_batch(stack_designs(stacks), jax.tree.map(lambda *x: jnp.stack(x), *states), pulse_durations=True)
 
 
 def test_batch_split_over_devices_equals_individual():

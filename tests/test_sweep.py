@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 import tomli_w
 import xarray as xr
+from scipy.integrate import quad
 from scipy.stats import qmc
 
 import hertz_chain as hc
@@ -42,7 +43,7 @@ def test_grid_sweep_equals_the_designs_run_one_by_one(tmp_path):
     and the stiffness of interface 2 as a [[contact.interface]] override), under gravity; the rigid gain
     against paper Eq 19 written out here."""
     out = tmp_path / "grid.zarr"
-    result = sweep(_file(tmp_path, GRID), out)
+    result = sweep(_file(tmp_path, GRID | {"durations": True}), out)
     assert (result.designs, result.chunks, result.computed) == (6, 3, 3)
     ds = _open(out)
     assert ds.top_velocity_gain.dims == ("stack.gaps", "contact.stiffness[2]")
@@ -67,6 +68,9 @@ def test_grid_sweep_equals_the_designs_run_one_by_one(tmp_path):
             # where it ended, which a batch places elsewhere: only the top's launch is final)
             assert float(ds.velocity_gains[i, j, -1]) == float(ds.top_velocity_gain[i, j])
             assert float(ds.rigid_gain[i, j]) == pytest.approx(eq19, rel=1e-12)
+            # the top pulse's 10 % duration (`durations = true`) against the report's, on its own steps: to the
+            # linear interpolation between steps at the 10 % points (measured 2e-6 .. 3e-5)
+            assert float(ds.top_duration_10[i, j]) == pytest.approx(rep.top_pulse.duration_10, rel=1e-4)
             # the rigid gains with the measured restitutions (Eq 19; event-driven with the design's gaps and
             # gravity) as the report computes them: undefined alike (touching: no complete first contact;
             # 0.1 mm: a pair separating faster than it closed, e > 1), else equal to the measured e's error
@@ -225,10 +229,14 @@ def test_pulse_variables_of_a_sphere_on_a_hertz_ground_against_johnson(tmp_path)
     """One 0.1 kg mass on an elastic Hertz ground, no gravity, swept over the stiffness and the drop
     speed: Johnson's closed forms (Contact Mechanics, 1985, §11.4): F_max = k d^1.5 with
     d = (5 m V^2 / (4 k))^(2/5); the velocity change 2V (e = 1); the equivalent half-sine pi 2V / (2 a).
-    The peaks are the solver's step samples: low, by at most 1e-3 at rtol 1e-10 (measured ~2e-4)."""
+    The peaks are the solver's step samples: low, by at most 1e-3 at rtol 1e-10 (measured ~2e-4). With
+    `durations = true`, the duration between the force's 10 % points from the energy integral
+    (d'^2 = V^2 (1 - (d/d_max)^(5/2)), F = k d^1.5: D_10 = 2 (d_max/V) int_{0.1^(2/3)}^1 du/sqrt(1 - u^2.5),
+    by scipy's quad), to the linear interpolation between steps at the 10 % points."""
     doc = {"drop": {"impact_velocity": "1 m/s", "gravity": 0}, "stack": {"masses": ["0.1 kg"]},
            "contact": {"law": "hertz", "stiffness": "1e9 N/m^1.5"},
-           "sweep": {"axis": [{"key": "contact.stiffness", "values": ["1e8 N/m^1.5", "1e10 N/m^1.5"]},
+           "sweep": {"durations": True,
+                     "axis": [{"key": "contact.stiffness", "values": ["1e8 N/m^1.5", "1e10 N/m^1.5"]},
                               {"key": "drop.impact_velocity", "values": ["0.5 m/s", "2 m/s"]}]}}
     path = tmp_path / "one.toml"
     path.write_text(tomli_w.dumps(doc))
@@ -242,6 +250,10 @@ def test_pulse_variables_of_a_sphere_on_a_hertz_ground_against_johnson(tmp_path)
             assert float(ds.top_peak_g[i, j]) == pytest.approx(got / m / g0, rel=1e-14)
             assert float(ds.top_delta_v[i, j]) == pytest.approx(2 * v, rel=1e-8)
             assert float(ds.top_equivalent_half_sine[i, j]) == pytest.approx(np.pi * v * m / f, rel=1e-3)
+            d_max = (5 * m * v * v / (4 * k)) ** 0.4
+            d10 = 2 * d_max / v * quad(lambda u: 1 / np.sqrt(1 - u**2.5), 0.1 ** (2 / 3), 1, limit=200)[0]
+            assert float(ds.top_duration_10[i, j]) == pytest.approx(d10, rel=3e-4)  # measured 1.15e-4
+    assert ds.top_duration_10.attrs["units"] == "s"
     assert ds.peak_force.dims == ("contact.stiffness", "drop.impact_velocity", "interface")
     assert ds.peak_force.attrs["units"] == "N" and ds.top_delta_v.attrs["units"] == "m s-1"
 
@@ -325,6 +337,7 @@ def test_overlap_fraction_and_regime_per_design_match_the_report(tmp_path):
         assert int(ds.regime[i]) == (0 if report.regime == "independent" else 1)
     assert independence[0] == pytest.approx(1.0) and 0.01 < independence[1] < 0.1 and independence[2] == 0.0
     assert [int(r) for r in ds.regime] == [1, 1, 0]
+    assert np.all(np.isnan(ds.top_duration_10))  # only with `durations = true`
 
 
 def test_rigid_gain_with_the_measured_restitutions_is_the_gain_of_independent_collisions(tmp_path):
