@@ -27,7 +27,8 @@ event-driven rigid cascade with them, `rigid_events.simulate_rigid_batch`) and
 top pulse without a step history (`BatchSolution.peak_forces`, `impact_velocities`: running values kept
 by the solver): `peak_force` per interface (N), `top_peak_g` (the top interface's peak force over the
 top mass, in g: the accelerometer's peak), `top_delta_v` (launch velocity minus the velocity just before
-the top's first contact, m/s) and `top_equivalent_half_sine` (`π ΔV / (2 a_peak)`, s), and `restitution`
+the top's first contact, m/s), `top_equivalent_half_sine` (`π ΔV / (2 a_peak)`, s) and, with
+`[sweep] durations = true`, `top_duration_10` (`simulate_batch(pulse_durations=True)`), and `restitution`
 per interface (its first contact's separation over approach speed, paper Eq 2, read at the steps around
 it in free flight: exact between two falling bodies, within g h of the step against the ground; NaN
 without a finished contact). The peaks are the
