@@ -55,9 +55,16 @@ def test_batch_equals_individual_and_isolates_failure():
         simulate_batch(stack_designs(stacks), jax.tree.map(lambda *x: jnp.stack(x), *states), pulse_durations=True)
 
 
-def test_batch_split_over_devices_equals_individual():
+@pytest.mark.parametrize("piece", [None, 1])
+def test_batch_split_over_devices_equals_individual(piece, monkeypatch):
     # Reference: individual solves. Five designs over the two CPU devices of conftest (shard_map, the
-    # last design repeated once to fill the second device, then dropped), with and without history.
+    # last design repeated once to fill the second device, then dropped), with and without history; and
+    # in pieces of two designs one after the other (`CPU_PIECE_PER_DEVICE` = 1: 2 + 2 + 1, the last
+    # padded), as a large batch on a CPU runs.
+    from hertz_chain import simulation
+
+    if piece is not None:
+        monkeypatch.setattr(simulation, "CPU_PIECE_PER_DEVICE", piece)
     assert jax.local_device_count() == 2
     ratios = [0.3, 0.4, 0.5, 0.6, 0.7]
     stacks = [Stack(r ** np.arange(3), HuntCrossley(1e9, 0.05), gravity=G) for r in ratios]
@@ -65,6 +72,8 @@ def test_batch_split_over_devices_equals_individual():
     xs = jax.tree.map(lambda *x: jnp.stack(x), *states)
     for save in (True, False):
         batch = simulate_batch(stack_designs(stacks), xs, tolerances=TIGHT, max_steps=3000, save_steps=save)
+        if piece is not None:
+            assert batch.scales.time.shape == (5,) and (batch.steps is None) != save
         assert len(batch) == 5 and batch.ok.all()
         for i in range(5):
             one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=3000)
