@@ -498,6 +498,12 @@ def optimize_table(result) -> str:
     if "srs_max_error_db" in c:
         lines.append(f"  SRS: largest miss {c['srs_max_error_db']:.2f} dB "
                      f"({'within' if c['srs_within_tolerance'] else 'outside'} the tolerance band)")
+    if "pulse_misses" in c:
+        pm = c["pulse_misses"]
+        lines.append(f"  pulse: peak g {100 * pm['peak_g']:+.3g} %, duration {100 * pm['duration']:+.3g} % against the "
+                     "target" + ("" if c["pulse_target_met"] else
+                                 " (NOT MET: the bounds or limits keep the target out of reach; this is the "
+                                 "closest pulse within them)"))
     if c.get("why"):
         lines.append(f"  {c['why']}")
     return "\n".join(lines)
