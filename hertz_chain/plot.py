@@ -140,11 +140,15 @@ def plot_sweep(store: str | Path, path: str | Path, *, x: str, y: str | None = N
     if var not in ds.data_vars or var == "chunk_done":
         raise ParameterError("--var", var, f"one of {', '.join(names)}")
     allowed = [d for d in ds.dims if d not in ("mass", "interface", "chunk")] if "design" not in ds.dims else \
-        [k for k in names if ds[k].dims == ("design",) and k not in VARIABLE_NAMES]
+        [k for k in names if ds[k].dims == ("design",) and k not in _variable_names()]
     for flag, name in (("--x", x), ("--y", y)):
         if name is not None and name not in allowed:
             raise ParameterError(flag, name, f"one of {', '.join(allowed)}")
     da = ds[var].where(ds["status"] <= 1) if var != "status" else ds[var]
+    if not np.any(np.isfinite(np.asarray(da, dtype=float))):
+        why = (" (the store was written without [sweep] durations = true)" if var == "top_duration_10" else
+               " for any completed design")
+        raise ParameterError("--var", var, f"a variable with values: {var} has none{why}")
     fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
     title = f"{var} ({da.attrs.get('long_name', '')})"
 
@@ -202,9 +206,11 @@ def plot_sweep(store: str | Path, path: str | Path, *, x: str, y: str | None = N
     plt.close(fig)
 
 
-VARIABLE_NAMES = ("status", "top_velocity_gain", "velocity_gains", "rigid_gain", "rigid_deficit", "energy_error",
-                  "num_steps", "t_final", "peak_force", "top_peak_g", "top_delta_v", "top_equivalent_half_sine",
-                  "restitution")
+def _variable_names() -> tuple[str, ...]:
+    """The result variables of a sweep store (`sweeps.VARIABLES`): not sampled keys."""
+    from .sweeps import VARIABLES
+
+    return tuple(VARIABLES)
 
 
 def _label(ds, name: str) -> str:

@@ -493,7 +493,9 @@ def optimize_table(result) -> str:
     pg = c.get("projected_gradient_norm")
     lines += ["", f"convergence: {c['method']}, {c['iterations']} iterations, starts: {c['starts_agree']}, "
               f"{result.evaluations} evaluations, {result.seconds:.1f} s",
-              f"  projected-gradient norm {pg:.3g}" if pg is not None and pg == pg else "  (derivative-free)",
+              f"  projected-gradient norm {pg:.3g}" if pg is not None and pg == pg else
+              "  (derivative-free)" if c.get("gradient") is None else
+              f"  gradient: {c['gradient']} (no projected-gradient norm under limits or a mass budget)",
               "  active bounds: " + (", ".join(c["active_bounds"]) or "none")]
     if "srs_max_error_db" in c:
         lines.append(f"  SRS: largest miss {c['srs_max_error_db']:.2f} dB "

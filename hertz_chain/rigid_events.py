@@ -436,6 +436,8 @@ def simulate_rigid_batch(masses, velocities, gaps, restitution, ground_restituti
     v = np.array(velocities, dtype=float)
     gp = np.array(gaps, dtype=float)
     e = np.array(restitution, dtype=float)
+    if e.ndim == 0:  # one value for every interface of every stack, as `simulate_rigid` takes
+        e = np.full((B, n), float(e))
     for name, x in (("velocities", v), ("gaps", gp), ("restitution", e)):
         if x.shape != (B, n):
             raise ParameterError(name, x.shape, f"a ({B}, {n}) array, one row per stack")
@@ -445,6 +447,9 @@ def simulate_rigid_batch(masses, velocities, gaps, restitution, ground_restituti
         raise ParameterError("gaps", "negative or non-finite", "finite gaps >= 0")
     if not np.all(np.isfinite(e[:, 1:]) & (e[:, 1:] >= 0) & (e[:, 1:] <= 1)):
         raise ParameterError("restitution", "outside [0, 1]", "pair restitutions in [0, 1]")
+    for name, x in (("ground_restitution", ground_restitution), ("gravity", gravity)):
+        if x is not None and np.ndim(x) not in (0, 1) or np.ndim(x) == 1 and np.shape(x) != (B,):
+            raise ParameterError(name, np.shape(x), f"a scalar or {B} values, one per stack")
     ground = ground_restitution is not None
     if ground:
         e0 = np.broadcast_to(np.asarray(ground_restitution, dtype=float), (B,)).copy()

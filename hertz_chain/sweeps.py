@@ -26,8 +26,8 @@ event-driven rigid cascade with them, `rigid_events.simulate_rigid_batch`) and
 `rigid_deficit` (`top_velocity_gain / rigid_gain - 1`), `energy_error`, `num_steps`, `t_final`, and the
 top pulse without a step history (`BatchSolution.peak_forces`, `impact_velocities`: running values kept
 by the solver): `peak_force` per interface (N), `top_peak_g` (the top interface's peak force over the
-top mass, in g: the accelerometer's peak), `top_delta_v` (launch velocity minus the velocity just before
-the top's first contact, m/s), `top_equivalent_half_sine` (`π ΔV / (2 a_peak)`, s) and, with
+top mass, in g: the accelerometer's peak), `top_delta_v` (the accelerometer's velocity change:
+launch velocity minus the velocity just before the top's first contact, plus g times the time between, m/s), `top_equivalent_half_sine` (`π ΔV / (2 a_peak)`, s) and, with
 `[sweep] durations = true`, `top_duration_10` (`simulate_batch(pulse_durations=True)`), and `restitution`
 per interface (its first contact's separation over approach speed, paper Eq 2, read at the steps around
 it in free flight: exact between two falling bodies, within g h of the step against the ground; NaN
@@ -82,7 +82,8 @@ VARIABLES = {  # name -> (units, long name)
     "t_final": ("s", "end time of the run"),
     "peak_force": ("N", "largest contact force of the interface in the first cascade (at the solver's steps)"),
     "top_peak_g": ("1", "peak of the top mass's accelerometer (a + g), in units of standard gravity (9.80665 m s-2)"),
-    "top_delta_v": ("m s-1", "velocity change of the top mass: launch velocity minus its velocity before its first contact"),
+    "top_delta_v": ("m s-1", "velocity change of the top mass's accelerometer (a + g integrated): its launch velocity "
+                    "minus its velocity before its first contact, plus g times the time between"),
     "top_equivalent_half_sine": ("s", "duration of the half-sine with the top pulse's peak and velocity change"),
     "top_duration_10": ("s", "duration of the top pulse between its 10 % points, at the solver's steps (NaN unless "
                         "[sweep] durations = true)"),
@@ -421,7 +422,12 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
     from .constants import G0
 
     peak_a = sol.peak_forces[:, -1] / masses[:, -1]  # the top mass has one contact: the interface below it
-    dv = sol.launch_velocities[:, -1] - sol.impact_velocities[:, -1]
+    # the accelerometer's velocity change (a + g integrated, as the report's pulse): the top's velocity
+    # change plus g times the time from its first contact to its launch (its first point in contact is
+    # within one onset step, ~1e-7 of the contact time, of the onset)
+    g = np.broadcast_to(np.asarray(stacks.gravity, dtype=float), (len(X),))
+    dv = (sol.launch_velocities[:, -1] - sol.impact_velocities[:, -1]
+          + g * (sol.launch_times[:, -1] - sol.first_contacts[:, -1, 0]))
     with np.errstate(divide="ignore", invalid="ignore"):
         eq_hs = np.where(peak_a > 0, np.pi * dv / (2.0 * peak_a), np.nan)
     overlap = overlap_fractions(sol.first_contacts, sol.t_final, dm.ground)
