@@ -1083,6 +1083,18 @@ def optimize(path: str | Path) -> OptimizeResult:
             err = mt["srs_error_db"]
             extra = {"srs_max_error_db": float(np.max(np.abs(err))),
                      "srs_within_tolerance": bool(np.max(np.abs(err)) <= problem.srs_tolerance_db)}
+    # every limit at the best point: its value and whether it binds (within 1e-3 of it) or is broken
+    limits = {}
+    if ev.n_constraints or problem.total_mass is not None:
+        ml = ev.metrics(top.u, count=False) if ev.n_constraints else {"ok": False}
+        for name, lim, val in (("max_peak_g", problem.max_peak_g, ml.get("peak_g") if ml["ok"] else None),
+                               ("max_peak_force", problem.max_peak_force, ml.get("peak_force") if ml["ok"] else None),
+                               ("total_mass", problem.total_mass,
+                                float(ev._mass(top.u)[0]) if problem.total_mass is not None else None)):
+            if lim is not None and val is not None:
+                limits[name] = {"limit": float(lim), "value": float(val),
+                                "state": ("broken" if val > lim * (1 + _LIMIT_TOLERANCE) else
+                                          "active" if val >= lim * (1 - 1e-3) else "inactive")}
     # a line search that can make no more progress at a point whose projected gradient vanishes (to the
     # gradient's own accuracy, ~1e-6 relative) has converged too (L-BFGS-B reports it as "ABNORMAL")
     stationary = math.isfinite(pg) and pg <= PG_TOLERANCE * max(1.0, abs(top.value))
@@ -1090,8 +1102,10 @@ def optimize(path: str | Path) -> OptimizeResult:
     why = "" if status.ok else f"the search stopped: {top.message}"
     if top.violation > _LIMIT_TOLERANCE:
         status = OptimizeStatus.NOT_CONVERGED
+        broken = ", ".join(f"{k} {v['value']:.6g} over {v['limit']:.6g}" for k, v in limits.items()
+                           if v["state"] == "broken")
         why = (f"no start found a design within the limits: the best breaks them by {top.violation:.3g} "
-               "(relative excess of the peak g, peak force or total mass over its limit)")
+               f"(relative excess over the limit{': ' + broken if broken else ''})")
     if extra.get("srs_within_tolerance") is False:
         status = OptimizeStatus.NOT_CONVERGED
         why = (f"the best SRS found misses the target by up to {extra['srs_max_error_db']:.2f} dB, beyond "
@@ -1111,6 +1125,7 @@ def optimize(path: str | Path) -> OptimizeResult:
         "iterations": top.iterations,
         "projected_gradient_norm": pg if math.isfinite(pg) else None,
         "active_bounds": active,
+        "limits": limits,
         "history": top.history,
         "n_tried": list(ns),
         "per_n": per_n,

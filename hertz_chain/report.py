@@ -497,6 +497,9 @@ def optimize_table(result) -> str:
               "  (derivative-free)" if c.get("gradient") is None else
               f"  gradient: {c['gradient']} (no projected-gradient norm under limits or a mass budget)",
               "  active bounds: " + (", ".join(c["active_bounds"]) or "none")]
+    if c.get("limits"):
+        lines.append("  limits: " + ", ".join(f"{k} {v['limit']:.6g}: {v['value']:.6g} ({v['state']})"
+                                             for k, v in c["limits"].items()))
     if "srs_max_error_db" in c:
         lines.append(f"  SRS: largest miss {c['srs_max_error_db']:.2f} dB "
                      f"({'within' if c['srs_within_tolerance'] else 'outside'} the tolerance band)")

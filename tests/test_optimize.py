@@ -510,6 +510,9 @@ def test_a_peak_force_limit_stops_the_drop_speed_where_johnson_says(tmp_path):
     assert misses["peak_g"] == pytest.approx(F / (m * 9.80665) / 10000 - 1, abs=1e-3)
     assert abs(misses["duration"]) < 1e-3 and result.convergence["pulse_target_met"] is False
     assert "NOT MET" in optimize_table(result)
+    limit = result.convergence["limits"]["max_peak_force"]  # the limit that keeps the target away, named
+    assert limit["state"] == "active" and limit["value"] == pytest.approx(F, rel=1e-3)
+    assert "max_peak_force 3000: " in optimize_table(result)
 
 
 def test_optimize_refuses_a_plastic_law_and_names_sweep_and_fit(tmp_path):
