@@ -891,8 +891,11 @@ class OptimizeResult:
         """The optimum as a stack file (TOML, without `[optimize]`)."""
         import tomli_w
 
+        miss = self.convergence.get("pulse_misses")
+        unmet = ("" if miss is None or self.convergence.get("pulse_target_met") else
+                 f", pulse target NOT MET (peak g {100 * miss['peak_g']:+.3g} %, duration {100 * miss['duration']:+.3g} %)")
         head = (f"# Written by hertz-chain optimize{' from ' + self.source if self.source else ''}: objective "
-                f"{self.objective!r}, status {self.status.text}, top velocity gain {self.top_velocity_gain:.9g}.\n"
+                f"{self.objective!r}, status {self.status.text}{unmet}, top velocity gain {self.top_velocity_gain:.9g}.\n"
                 "# Plain numbers are SI units (kg, m, N/m^1.5 or N/m, m/s).\n")
         return head + tomli_w.dumps(self.doc)
 

@@ -513,6 +513,7 @@ def test_a_peak_force_limit_stops_the_drop_speed_where_johnson_says(tmp_path):
     limit = result.convergence["limits"]["max_peak_force"]  # the limit that keeps the target away, named
     assert limit["state"] == "active" and limit["value"] == pytest.approx(F, rel=1e-3)
     assert "max_peak_force 3000: " in optimize_table(result)
+    assert "pulse target NOT MET (peak g -69.4 %" in result.document().splitlines()[0]
 
 
 def test_optimize_refuses_a_plastic_law_and_names_sweep_and_fit(tmp_path):
