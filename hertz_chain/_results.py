@@ -116,8 +116,9 @@ class BatchSolution:
     without one); `top_duration_10 (B,)`: the top mass's pulse duration between its 10 % points
     (`pulse.pulse_metrics`'s `duration_10` on the accelerometer sampled at the accepted points of the
     first cascade, streamed through the solve; NaN without a pulse, for a pulse still above 10 % at the
-    end, or a rising edge of more than 64 steps above the 10 % level); all five None with a step history
-    (analyse a design instead).
+    end, or a rising edge too long for the 256 slots kept), and `top_rise_time (B,)`, its 10 % to 90 % rise
+    (`rise_time`; NaN alike), both only with `pulse_durations=True`; all None with a step history (analyse
+    a design instead).
     """
 
     status_code: np.ndarray
@@ -141,6 +142,7 @@ class BatchSolution:
     restitutions: np.ndarray | None = None
     first_contacts: np.ndarray | None = None
     top_duration_10: np.ndarray | None = None
+    top_rise_time: np.ndarray | None = None
 
     @property
     def ok(self) -> np.ndarray:

@@ -211,7 +211,8 @@ def _solve_impl(stack: Stack, state: State, ts, t_max, cfg: _SolveConfig, launch
         out["first_contacts"] = jnp.stack([pk[T_FIRST_IN], pk[T_FIRST_OUT]], axis=-1) * sc.time
         # the top pulse's 10 % duration at the steps (NaN: no pulse, not ended, or a rising edge too long to follow)
         if contacts.pulse is not None:
-            out["top_duration_10"] = _pulse_duration(*contacts.pulse, pk[PEAK_FORCE, -1]) * sc.time
+            duration, rise = _pulse_duration(*contacts.pulse, pk[PEAK_FORCE, -1])
+            out["top_duration_10"], out["top_rise_time"] = duration * sc.time, rise * sc.time
     if ts is not None:
         grid = _derived(stack, sol.ys[int(cfg.save_steps)][:, :n3] * scale[None, :])
         grid["t"] = ts

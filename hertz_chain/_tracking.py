@@ -135,8 +135,10 @@ T_IN, T_OUT, DELTA_OUT, RATE_OUT, V_LOWER_OUT, V_UPPER_OUT, Q_OUT = range(7)
 #: stretch below the 10 % level one or two); where the samples from its start to its peak do not fit, the
 #: duration is NaN
 PULSE_RING = 256
-#: the level of the pulse duration, a fraction of the peak (the shock-test standards' 10 % points)
+#: the level of the pulse duration, a fraction of the peak (the shock-test standards' 10 % points), and the
+#: top of the rise time (from `PULSE_LEVEL` to 90 %, as `pulse.pulse_metrics`)
 PULSE_LEVEL = 0.1
+RISE_TOP = 0.9
 # entries of the pulse's running values
 P_COUNT, P_AT_PEAK, P_END, P_PENDING, P_T_PREV, P_Y_PREV, P_PREV_BELOW, P_PREV_FALL = range(8)
 
@@ -189,9 +191,12 @@ def _pulse_update(ring, run, t, y, peak, frozen):
 
 
 def _pulse_duration(ring, run, peak):
-    """The main pulse's duration at `PULSE_LEVEL` from `_pulse_update`'s values after the last sample
-    (one pulse): NaN without a pulse, while it is still above the level at the end, or where the samples
-    from its start to its peak are no longer all in the ring."""
+    """The main pulse's duration at `PULSE_LEVEL` and its rise time (from that level to `RISE_TOP` of the
+    peak: the first sample at or above it after the start, interpolated from the one before, as
+    `pulse.pulse_metrics`), from `_pulse_update`'s values after the last sample (one pulse): NaN without a
+    pulse, while it is still above the level at the end, or where the samples from its start to its peak
+    are no longer all in the ring. (The first sample at or above `RISE_TOP` rose from the one before it,
+    so neither was replaced: both are in consecutive slots.)"""
     k = ring.shape[-1] - 1
     back = jnp.arange(k)  # slots back from the peak
     p = run[P_AT_PEAK] - back  # their positions
@@ -203,7 +208,10 @@ def _pulse_duration(ring, run, peak):
     j = jnp.argmax(below)  # the latest sample before the peak below the level (j >= 1)
     start = _cross(t[j], y[j], t[j - 1], y[j - 1], level)
     ok = jnp.any(below) & (run[P_PENDING] == 0) & (peak > 0)
-    return jnp.where(ok, run[P_END] - start, jnp.nan)
+    top = RISE_TOP * peak
+    m = jnp.max(jnp.where(kept & (back < j) & (y >= top), back, 0))  # the first at or above it, after the start
+    rise = _cross(t[m + 1], y[m + 1], t[m], y[m], top) - start
+    return jnp.where(ok, run[P_END] - start, jnp.nan), jnp.where(ok, rise, jnp.nan)
 
 
 class _Contacts(eqx.Module):

@@ -283,9 +283,10 @@ def simulate_batch(
     for `simulate`. Costs per design are measured in `benchmarks/` (`make bench`).
 
     `pulse_durations=True` (with `save_steps=False`) also streams the top mass's pulse through the solve
-    for its 10 % duration (`BatchSolution.top_duration_10`): the last 256 samples of the pulse are kept
-    per design, and every step's state passes through diffrax's accept/reject select, so it costs about
-    20 % per step (measured: five-mass Tsuji designs, `benchmarks/sweep.md`). Raises `ParameterError`
+    for its 10 % duration and 10-90 % rise time (`BatchSolution.top_duration_10`, `top_rise_time`): up
+    to 256 samples of the pulse are kept per design, and every step's state passes through diffrax's
+    accept/reject select, so it costs about 20 % per step (measured: five-mass Tsuji designs,
+    `benchmarks/sweep.md`). Raises `ParameterError`
     with `save_steps=True` (analyse a design's history instead).
     """
     if pulse_durations and save_steps:
@@ -332,6 +333,7 @@ def simulate_batch(
         restitutions=np_(out["restitutions"]) if "restitutions" in out else None,
         first_contacts=np_(out["first_contacts"]) if "first_contacts" in out else None,
         top_duration_10=np_(out["top_duration_10"]) if "top_duration_10" in out else None,
+        top_rise_time=np_(out["top_rise_time"]) if "top_rise_time" in out else None,
     )
 
 

@@ -28,7 +28,8 @@ top pulse without a step history (`BatchSolution.peak_forces`, `impact_velocitie
 by the solver): `peak_force` per interface (N), `top_peak_g` (the top interface's peak force over the
 top mass, in g: the accelerometer's peak), `top_delta_v` (the accelerometer's velocity change:
 launch velocity minus the velocity just before the top's first contact, plus g times the time between, m/s), `top_equivalent_half_sine` (`π ΔV / (2 a_peak)`, s) and, with
-`[sweep] durations = true`, `top_duration_10` (`simulate_batch(pulse_durations=True)`), and `restitution`
+`[sweep] durations = true`, `top_duration_10` and `top_rise_time` (`simulate_batch(pulse_durations=True)`),
+and `restitution`
 per interface (its first contact's separation over approach speed, paper Eq 2, read at the steps around
 it in free flight: exact between two falling bodies, within g h of the step against the ground; NaN
 without a finished contact). The peaks are the
@@ -87,6 +88,8 @@ VARIABLES = {  # name -> (units, long name)
     "top_equivalent_half_sine": ("s", "duration of the half-sine with the top pulse's peak and velocity change"),
     "top_duration_10": ("s", "duration of the top pulse between its 10 % points, at the solver's steps (NaN unless "
                         "[sweep] durations = true)"),
+    "top_rise_time": ("s", "rise time of the top pulse from 10 % to 90 % of its peak, at the solver's steps (NaN unless "
+                      "[sweep] durations = true)"),
     "restitution": ("1", "effective restitution of the interface's first contact: separation over approach speed"),
     "overlap_fraction": ("1", "largest fraction of the shorter first contact during which two neighbouring "
                          "interfaces are both closed (0: sequential; step-resolved)"),
@@ -437,6 +440,7 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
            "num_steps": sol.num_steps.astype(np.int64), "t_final": sol.t_final,
            "peak_force": sol.peak_forces, "top_peak_g": peak_a / G0, "top_delta_v": dv, "top_equivalent_half_sine": eq_hs,
            "top_duration_10": sol.top_duration_10 if plan.sweep.durations else np.full(len(X), np.nan),
+           "top_rise_time": sol.top_rise_time if plan.sweep.durations else np.full(len(X), np.nan),
            "restitution": sol.restitutions, "overlap_fraction": overlap,
            "regime": (overlap >= INDEPENDENT_BELOW).astype(np.int8)}
     if plan.dims == ("design",):
@@ -448,7 +452,7 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
         out["status"] = np.where(valid, out["status"], np.int8(Status.FAILED)).astype(np.int8)
         for k in ("top_velocity_gain", "velocity_gains", "rigid_gain", "rigid_deficit", "rigid_gain_measured",
                   "rigid_gain_event_driven", "energy_error", "t_final",
-                  "peak_force", "top_peak_g", "top_delta_v", "top_equivalent_half_sine", "top_duration_10",
+                  "peak_force", "top_peak_g", "top_delta_v", "top_equivalent_half_sine", "top_duration_10", "top_rise_time",
                   "restitution", "overlap_fraction"):
             out[k] = np.where(valid.reshape((-1,) + (1,) * (out[k].ndim - 1)), out[k], np.nan)
         out["num_steps"] = np.where(valid, out["num_steps"], 0)

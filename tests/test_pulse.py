@@ -295,7 +295,8 @@ def test_time_shift_property(rec, tau):
 
 
 def test_streamed_duration_equals_pulse_metrics_on_the_whole_record():
-    """The 10 % duration that `simulate_batch(pulse_durations=True)` streams through the solve
+    """The 10 % duration and the 10-90 % rise time that `simulate_batch(pulse_durations=True)` streams
+    through the solve
     (`_tracking._pulse_update` sample by sample, `_pulse_duration` at the end), against `pulse_metrics`
     on the whole record (the reference): random records, smooth and noisy, one to three humps of growing
     or shrinking height, with plateaus and ties (values rounded), to round-off; and NaN, not a wrong
@@ -312,7 +313,7 @@ def test_streamed_duration_equals_pulse_metrics_on_the_whole_record():
             return (_pulse_update(*st, ty[0], ty[1], peak, jnp.asarray(False)), jnp.maximum(peak, ty[1])), None
 
         (st, peak), _ = jax.lax.scan(body, (_pulse_start(t[0], 0.0 * y[0]), 0.0 * y[0]), (t, y))
-        return _pulse_duration(*st, peak)
+        return jnp.stack(_pulse_duration(*st, peak))
 
     rng = np.random.default_rng(5)
     n, found = 200, 0
@@ -323,11 +324,13 @@ def test_streamed_duration_equals_pulse_metrics_on_the_whole_record():
         y[0] = y[-1] = 0.0
         if trial % 4 == 0:
             y = np.round(y, 1)  # plateaus, and ties of the peak
-        got = float(stream(jnp.asarray(t), jnp.asarray(y)))
+        got, rise = (float(v) for v in stream(jnp.asarray(t), jnp.asarray(y)))
         if np.isfinite(got):
             found += 1
-            assert got == pytest.approx(pulse_metrics(t, y).duration_10, rel=1e-12, abs=1e-15)
+            pm = pulse_metrics(t, y)
+            assert got == pytest.approx(pm.duration_10, rel=1e-12, abs=1e-15)
+            assert rise == pytest.approx(pm.rise_time, rel=1e-12, abs=1e-15)
     assert found >= 35
     t = np.linspace(0.0, 1.0, 4 * PULSE_RING)
     y = np.sin(np.pi * t) ** 2  # a rising edge of ~1.6 PULSE_RING samples above the 10 % level
-    assert np.isnan(float(stream(jnp.asarray(t), jnp.asarray(y))))
+    assert np.all(np.isnan(np.asarray(stream(jnp.asarray(t), jnp.asarray(y)))))

@@ -71,6 +71,7 @@ def test_grid_sweep_equals_the_designs_run_one_by_one(tmp_path):
             # the top pulse's 10 % duration (`durations = true`) against the report's, on its own steps: to the
             # linear interpolation between steps at the 10 % points (measured 2e-6 .. 3e-5)
             assert float(ds.top_duration_10[i, j]) == pytest.approx(rep.top_pulse.duration_10, rel=1e-4)
+            assert float(ds.top_rise_time[i, j]) == pytest.approx(rep.top_pulse.rise_time, rel=2e-4)  # measured 6.5e-5
             # the accelerometer's velocity change under gravity (a + g integrated, as the report's pulse; the
             # bare launch-minus-impact velocity missed g times the contact time: -0.4 % touching)
             assert float(ds.top_delta_v[i, j]) == pytest.approx(rep.top_pulse.delta_v, rel=1e-6)
@@ -236,7 +237,8 @@ def test_pulse_variables_of_a_sphere_on_a_hertz_ground_against_johnson(tmp_path)
     The peaks are the solver's step samples: low, by at most 1e-3 at rtol 1e-10 (measured ~2e-4). With
     `durations = true`, the duration between the force's 10 % points from the energy integral
     (d'^2 = V^2 (1 - (d/d_max)^(5/2)), F = k d^1.5: D_10 = 2 (d_max/V) int_{0.1^(2/3)}^1 du/sqrt(1 - u^2.5),
-    by scipy's quad), to the linear interpolation between steps at the 10 % points."""
+    by scipy's quad), and the 10-90 % rise time (the same integral from 0.1^(2/3) to 0.9^(2/3)), to the
+    linear interpolation between steps at those points."""
     doc = {"drop": {"impact_velocity": "1 m/s", "gravity": 0}, "stack": {"masses": ["0.1 kg"]},
            "contact": {"law": "hertz", "stiffness": "1e9 N/m^1.5"},
            "sweep": {"durations": True,
@@ -257,6 +259,8 @@ def test_pulse_variables_of_a_sphere_on_a_hertz_ground_against_johnson(tmp_path)
             d_max = (5 * m * v * v / (4 * k)) ** 0.4
             d10 = 2 * d_max / v * quad(lambda u: 1 / np.sqrt(1 - u**2.5), 0.1 ** (2 / 3), 1, limit=200)[0]
             assert float(ds.top_duration_10[i, j]) == pytest.approx(d10, rel=3e-4)  # measured 1.15e-4
+            rise = d_max / v * quad(lambda u: 1 / np.sqrt(1 - u**2.5), 0.1 ** (2 / 3), 0.9 ** (2 / 3))[0]
+            assert float(ds.top_rise_time[i, j]) == pytest.approx(rise, rel=6e-4)  # measured 2.2e-4
     assert ds.top_duration_10.attrs["units"] == "s"
     assert ds.peak_force.dims == ("contact.stiffness", "drop.impact_velocity", "interface")
     assert ds.peak_force.attrs["units"] == "N" and ds.top_delta_v.attrs["units"] == "m s-1"
