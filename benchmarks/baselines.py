@@ -126,12 +126,37 @@ def _tableau():
 _A, _B, _E = _tableau()
 
 
+FLIGHT_FRACTION = hc.Tolerances().flight_fraction
+
+
+@njit(cache=True)
+def flight_limit(y, n, ground, scale, T, max_step):
+    """The library's largest step (`hertz_chain._solver.flight_limit`) for these cases (no gravity, no end
+    force, no wall: free masses keep their velocities): `max(max_step, f * min_j (-delta_j / delta_dot_j))`
+    over the closing gaps while every interface is open, else `max_step`."""
+    tmin = math.inf
+    for j in range(n):
+        if j == 0 and not ground:
+            continue
+        if j == 0:
+            d, r = -y[0] * scale[0], -y[n] * scale[n]
+        else:
+            d = y[j - 1] * scale[j - 1] - y[j] * scale[j]
+            r = y[n + j - 1] * scale[n + j - 1] - y[n + j] * scale[n + j]
+        if d >= 0.0:
+            return max_step
+        if r > 0.0:
+            tmin = min(tmin, -d / r)
+    return max(max_step, FLIGHT_FRACTION * tmin / T)
+
+
 @njit(cache=True)
 def tsit5(y0, t1, rtol, atol, max_step, first_step, m, k, c, ground, scale, T, A, B, E):
     """Integrate the scaled field from 0 to `t1` with Tsit5 and the library's controller: diffrax's
-    `PIDController(pcoeff=0.4, icoeff=0.3, dtmax=max_step)` (error order 5, as diffrax gives Tsit5;
+    `PIDController(pcoeff=0.4, icoeff=0.3)` (error order 5, as diffrax gives Tsit5;
     safety 0.9, an accepted step never shrinks the next, a rejected one shrinks it by 0.2 to 0.9, the
-    previous accepted inverse error in the P term) and first step `first_step`; RMS error norm over the
+    previous accepted inverse error in the P term), the next step at most `flight_limit` of the state it
+    starts from (`Tolerances.flight_steps`), and first step `first_step`; RMS error norm over the
     library's state, which carries one more (flag) entry without error. No allocation in the loop.
     Returns `(y, steps, accepted)`."""
     n3 = y0.shape[0]
@@ -175,13 +200,14 @@ def tsit5(y0, t1, rtol, atol, max_step, first_step, m, k, c, ground, scale, T, A
         factor = min(max(factor, lo), hi)
         if inv == 0.0 or math.isinf(inv):
             inv = 1.0
-        h = min(ht * factor, max_step)
+        h = ht * factor
         if keep:
             t += ht
             y[:] = yn
             K[0, :] = K[6, :]
             accepted += 1
             prev_inv = inv
+        h = min(h, flight_limit(y, n, ground, scale, T, max_step))
     return y, steps, accepted
 
 

@@ -17,7 +17,8 @@ from hertz_chain.status import Status
 
 def test_batch_equals_individual_and_isolates_failure():
     # Reference: vmap must reproduce the individual solves; a design needing more steps than max_steps
-    # (0.6 m gaps at 0.5 contact times per step) fails alone.
+    # fails alone: with 0.6 m gaps mass 1 bounces on the ground again and again before the masses above
+    # reach it (~1,550 steps at TIGHT; the two others ~670).
     m = _mvg(3)
     ks = [1e9, 3e8, 1e9]
     gaps = [1e-4, 2e-4, 0.6]
@@ -25,11 +26,11 @@ def test_batch_equals_individual_and_isolates_failure():
     stacks = [Stack(m, HuntCrossley(k, 0.05), gravity=G) for k in ks]
     states = [at_impact(s, 1.0, g) for s, g in zip(stacks, gaps)]
     batch = simulate_batch(stack_designs(stacks), jax.tree.map(lambda *x: jnp.stack(x), *states),
-                           tolerances=TIGHT, max_steps=3000, ts=grid)
+                           tolerances=TIGHT, max_steps=1000, ts=grid)
     assert list(batch.ok) == [True, True, False]
     assert batch.status[2] == Status.INCOMPLETE_MAX_STEPS
     for i in range(2):
-        one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=3000, ts=grid)
+        one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=1000, ts=grid)
         # batched kernels round differently, so the step sequences drift apart: agreement is to the
         # global error of the solve (~1e-9 at rtol = atol = 1e-11), not bitwise
         assert abs(int(batch.num_steps[i]) - one.num_steps) <= 0.03 * one.num_steps
@@ -38,13 +39,13 @@ def test_batch_equals_individual_and_isolates_failure():
         np.testing.assert_allclose(batch.grid["velocities"][i], one.grid.velocities, rtol=0, atol=1e-8)
         np.testing.assert_allclose(batch.design(i).grid.forces, one.grid.forces, rtol=1e-6)
     with pytest.raises(SolverError, match="max_steps"):
-        simulate(stacks[2], states[2], tolerances=TIGHT, max_steps=3000)
+        simulate(stacks[2], states[2], tolerances=TIGHT, max_steps=1000)
     # Without the step history (throughput mode) the launch data are unchanged: same reference.
     lean = simulate_batch(stack_designs(stacks), jax.tree.map(lambda *x: jnp.stack(x), *states),
-                          tolerances=TIGHT, max_steps=3000, save_steps=False)
+                          tolerances=TIGHT, max_steps=1000, save_steps=False)
     assert lean.steps is None and list(lean.ok) == [True, True, False]
     for i in range(2):
-        one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=3000)
+        one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=1000)
         np.testing.assert_allclose(lean.launch_velocities[i], one.launch_velocities, rtol=1e-8)
         np.testing.assert_allclose(lean.launch_times[i], one.launch_times, rtol=1e-7)
         assert lean.design(i).steps is None
@@ -71,12 +72,12 @@ def test_batch_split_over_devices_equals_individual(piece, monkeypatch):
     states = [at_impact(s, 1.0, 1e-4) for s in stacks]
     xs = jax.tree.map(lambda *x: jnp.stack(x), *states)
     for save in (True, False) if piece is None else (False,):  # pieces: the sweeps' path
-        batch = simulate_batch(stack_designs(stacks), xs, tolerances=TIGHT, max_steps=3000, save_steps=save)
+        batch = simulate_batch(stack_designs(stacks), xs, tolerances=TIGHT, max_steps=1000, save_steps=save)
         if piece is not None:
             assert batch.scales.time.shape == (5,) and (batch.steps is None) != save
         assert len(batch) == 5 and batch.ok.all()
         for i in range(5):
-            one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=3000)
+            one = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=1000)
             np.testing.assert_allclose(batch.launch_velocities[i], one.launch_velocities, rtol=1e-8)
             # batched kernels round differently and the step sequences drift apart (module docstring)
             assert abs(int(batch.num_steps[i]) - one.num_steps) <= 0.05 * one.num_steps

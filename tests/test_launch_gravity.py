@@ -319,6 +319,47 @@ def test_gapped_drop_long_settling(n, law, gap):
         assert sol.t_final < ref.t_end or ref.status != "complete"
 
 
+def test_free_flight_steps_end_before_any_contact_and_cost_few_steps():
+    # `Tolerances.flight_steps` (docs/solver-defaults.md, "Free flights"): a step longer than `max_step`
+    # contact times is taken only where every gap is open, and ends before any contact begins (the
+    # exact closure times of free parabolas). The launch is the reference's (test above: 5 cm, rel 1e-6).
+    # The 3-mass Tsuji stack with 5 cm gaps: its free flights (every gap open) last ~175 contact times
+    # until the cascade ends, which the `max_step` bound of 0.5 contact times alone would cover in
+    # >= 349 steps; with flight steps each of its ~5 flights costs some 20 (the growth after a release,
+    # the approach to the next onset), less than half in all.
+    sol = _run(3, "tsuji", 5e-2)
+    assert sol.status.ok
+    t, d, T = np.asarray(sol.steps.t), np.asarray(sol.steps.overlaps), float(sol.scales.time)
+    dt, open_ = np.diff(t), np.all(d < 0, axis=1)
+    long = dt > 0.5 * T * (1 + 1e-9)
+    assert long.sum() > 10
+    assert np.all(open_[:-1][long] & open_[1:][long])
+    free = open_[:-1] & open_[1:]
+    bound_alone = dt[free].sum() / (0.5 * T)  # steps the max_step bound alone would need
+    assert bound_alone > 300
+    assert free.sum() < bound_alone / 2
+    assert sol.launch_velocities[-1] == pytest.approx(_ref_drop(3, "tsuji", 5e-2).launch[-1], rel=1e-6)
+
+
+def test_closure_times_are_the_first_positive_root():
+    # Reference: numpy.roots of delta + r t + a t^2 / 2 (companion-matrix eigenvalues), the smallest
+    # positive real root, inf if none; random gaps, rates and accelerations of both signs, a = 0 too.
+    from hertz_chain._solver import _closure_times
+
+    rng = np.random.default_rng(7)
+    delta = -10 ** rng.uniform(-6, -1, 400)
+    rate = rng.normal(0, 1, 400)
+    acc = np.where(rng.random(400) < 0.2, 0.0, rng.normal(0, 10, 400))
+    got = np.asarray(_closure_times(delta, rate, acc))
+    for dj, rj, aj, tj in zip(delta, rate, acc, got):
+        roots = np.roots([aj / 2, rj, dj] if aj != 0 else [rj, dj])
+        pos = [x.real for x in roots if abs(x.imag) <= 1e-12 * abs(x) and x.real > 0]
+        if pos:
+            assert tj == pytest.approx(min(pos), rel=1e-9)
+        else:
+            assert tj == np.inf
+
+
 def test_issue_16_example_gain_and_until_t_max():
     # Issue 16: masses [1, 0.4, 0.16] kg, 5 cm gaps, 1 m/s, Tsuji 1e9 N/m^1.5, e = 0.8, standard gravity.
     # Before the fix hertz_chain reported a gain of 0.1718 (the top mass's velocity after its last

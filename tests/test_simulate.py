@@ -195,6 +195,9 @@ def test_bad_options_raise_parameter_error():
         simulate(stack, s0, ts=[0.0, 2.0], t_max=1.0)
     with pytest.raises(ParameterError):
         Tolerances(rtol=0.0)
+    for bad in (0.0, 1.0, "0.5"):
+        with pytest.raises(ParameterError, match="flight_fraction.*0 < flight_fraction < 1"):
+            Tolerances(flight_fraction=bad)
     with pytest.raises(ParameterError):
         simulate_impact(Hertz(1e9), -1.0, 1.0)
 
