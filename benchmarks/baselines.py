@@ -282,6 +282,56 @@ def batched(quick: bool, designs: int = 1024, rtol: float = 1e-9) -> dict:
                 steps_library=float(np.mean(np.asarray(sol.num_steps))), steps_numba=float(np.mean(nb_steps)))
 
 
+# ============================================================================ the JAX floor
+def jax_tsit5_solver(stack):
+    """The numba loop's algorithm (`tsit5`: Tsit5, the library's PI controller and flight bound, the RMS
+    norm) as a bare `jax.lax.while_loop` over the library's own scaled field (`_scaled_field`, onset
+    proxies and flag entry included), jitted once: the fastest a JAX program of this algorithm runs on
+    the CPU, without diffrax's loop, the contact tracking or the stopping event (it runs to `t1`, as the
+    numba loop does). Returns `solve(y0, t1, rtol, args) -> (y, steps, accepted)`."""
+    import jax
+    import jax.numpy as jnp
+
+    from hertz_chain._solver import flight_limit
+
+    A, B, E = (jnp.asarray(a) for a in (_A, _B, _E))
+    C = jnp.asarray(np.sum(_A, axis=1))
+    tol0 = hc.Tolerances()
+
+    @jax.jit
+    def solve(y0, t1, rtol, args):
+        f = lambda t, y: _scaled_field(t, y, args)  # noqa: E731
+        m = y0.shape[0]
+
+        def body(c):
+            t, y, k0, h, prev_inv, steps, acc = c
+            ht = jnp.minimum(h, t1 - t)
+            ks = [k0]
+            for st in range(1, 7):
+                yi = y + ht * sum(A[st, r] * ks[r] for r in range(st))
+                ks.append(f(t + C[st] * ht, yi))
+            yn = y + ht * sum(B[r] * ks[r] for r in range(7))
+            err = ht * sum(E[r] * ks[r] for r in range(7))
+            sc = rtol + rtol * jnp.maximum(jnp.abs(y), jnp.abs(yn))
+            norm = jnp.sqrt(jnp.sum((err / sc) ** 2) / m)
+            keep = norm < 1.0
+            inv = jnp.where(norm == 0.0, jnp.inf, 1.0 / norm)
+            factor = 0.9 * inv ** (0.7 / 5.0) * prev_inv ** (-0.4 / 5.0)
+            factor = jnp.clip(factor, jnp.where(keep, 1.0, 0.2), jnp.where(keep, 10.0, 0.9))
+            inv = jnp.where(jnp.isinf(inv), 1.0, inv)
+            y2 = jnp.where(keep, yn, y)
+            h2 = jnp.minimum(ht * factor, flight_limit(args, y2, tol0.max_step, tol0.flight_fraction))
+            return (jnp.where(keep, t + ht, t), y2, jnp.where(keep, ks[6], k0), h2,
+                    jnp.where(keep, inv, prev_inv), steps + 1, acc + keep.astype(jnp.int32))
+
+        init = (jnp.asarray(0.0), y0, f(0.0, y0), jnp.asarray(tol0.first_step), jnp.asarray(1.0),
+                jnp.asarray(0, jnp.int32), jnp.asarray(0, jnp.int32))
+        out = jax.lax.while_loop(lambda c: c[0] < t1, body, init)
+        return out[1], out[5], out[6]
+
+    return solve
+
+
 # ============================================================================ one case
 class Case:
     """The numba equations of one benchmark case (`cases.build`) and its library reference."""
@@ -341,6 +391,38 @@ class Case:
         return dict(ok=True, err=rel_err(v, self.ref), steps=int(steps), accepted=int(acc), rtol=rtol, v=v,
                     time=median_time(run, 9, budget_s=1.0))
 
+    def jax_tsit5(self, rtol: float) -> dict:
+        """`jax_tsit5_solver`'s bare JAX loop on the library's default equations (the JAX floor)."""
+        import jax
+
+        if not hasattr(self, "_jax_solve"):
+            self._jax_solve = jax_tsit5_solver(self.stack)
+            self._jax_args = FieldArgs(self.stack, self.scale, self.T)
+        y0 = np.append(self.y0p, 0.0)
+        run = lambda: jax.block_until_ready(self._jax_solve(y0, self.t1, rtol, self._jax_args))  # noqa: E731
+        y, steps, acc = run()
+        v = float(y[2 * self.n - 1] * self.V)
+        return dict(ok=True, err=rel_err(v, self.ref), steps=int(steps), accepted=int(acc), rtol=rtol, v=v,
+                    time=median_time(run, 9, budget_s=1.0))
+
+    def numba_from_jax_us(self, rtol: float) -> dict:
+        """The option of issue 22 "a compiled integrator called from JAX": the numba loop inside a jitted JAX
+        function through `jax.pure_callback` (the host call JAX would make), timed against the same loop
+        called directly; the difference is the price of the crossing per solve (us)."""
+        import jax
+        import jax.numpy as jnp
+
+        def host(y0):
+            y, _, _ = tsit5(np.asarray(y0), self.t1, rtol, rtol, MAX_STEP, FIRST_STEP, *self.args, _A, _B, _E)
+            return y
+
+        shape = jax.ShapeDtypeStruct(self.y0p.shape, jnp.float64)
+        through = jax.jit(lambda y0: jax.pure_callback(host, shape, y0)[2 * self.n - 1])
+        y0 = jnp.asarray(self.y0p)
+        direct = median_time(lambda: host(self.y0p), 51, budget_s=2.0)
+        called = median_time(lambda: jax.block_until_ready(through(y0)), 51, budget_s=2.0)
+        return dict(direct_us=1e6 * direct, from_jax_us=1e6 * called, crossing_us=1e6 * (called - direct))
+
     def library(self, rtol: float) -> dict:
         """`hc.simulate` with the library's defaults but `rtol = atol` (onset proxies on, as users run)."""
         sol = hc.simulate(self.stack, self.state, tolerances=hc.Tolerances(rtol=rtol, atol=rtol), max_steps=65536,
@@ -383,12 +465,12 @@ def run_case(n: int, regime: str, quick: bool) -> dict:
             key = (kind, rtol)
             if key not in memo:
                 memo[key] = (c.library(rtol) if kind == "library" else c.numba_tsit5(rtol) if kind == "numba-tsit5"
-                             else c.scipy(kind, rtol))
+                             else c.jax_tsit5(rtol) if kind == "jax-tsit5" else c.scipy(kind, rtol))
             return memo[key]
         return get
 
     rows = {}
-    for kind in ("library", "numba-tsit5", "DOP853", "LSODA", "Radau"):
+    for kind in ("library", "numba-tsit5", "jax-tsit5", "DOP853", "LSODA", "Radau"):
         if quick and kind == "Radau":
             continue
         r = find_matched(getter(kind), grid, MATCH)
@@ -404,8 +486,20 @@ def run_case(n: int, regime: str, quick: bool) -> dict:
     # the floor reproduces the library's launch velocity (same algorithm, same tolerance): 1e-9 at 1e-10
     lib = c.library(1e-10)
     nb = c.numba_tsit5(1e-10)
+    jx = c.jax_tsit5(1e-10)
     out["tsit5_agreement_at_1e-10"] = rel_err(nb["v"], lib["v_top"])
-    out["tsit5_steps_at_1e-10"] = {"library": lib["steps"], "numba": nb["steps"]}
+    out["jax_tsit5_agreement_at_1e-10"] = rel_err(jx["v"], lib["v_top"])
+    out["tsit5_steps_at_1e-10"] = {"library": lib["steps"], "numba": nb["steps"], "jax": jx["steps"]}
+    # cost per step at one tolerance, all three on the same run: the library's (launch_velocity, prepared
+    # callable: no per-call preparation), the bare JAX loop's, numba's
+    lv = hc.prepare_launch(c.stack, c.state, tolerances=hc.Tolerances(rtol=1e-10, atol=1e-10),
+                           max_steps=steps_budget(lib["steps"]))
+    import jax
+
+    t_lib = median_time(lambda: jax.block_until_ready(lv(c.stack, c.state)), 25, budget_s=3.0)
+    out["numba_from_jax_at_1e-10"] = c.numba_from_jax_us(1e-10)
+    out["per_step_us_at_1e-10"] = {"library": 1e6 * t_lib / lib["steps"], "jax": 1e6 * jx["time"] / jx["steps"],
+                                   "numba": 1e6 * nb["time"] / nb["steps"]}
     out["rows"] = rows
     return out
 
@@ -480,7 +574,25 @@ def _write(data: dict, path: str | None) -> None:
               "difference per case below); the numba Tsit5 loop gives the library's launch velocity at rtol 1e-10.", ""]
     for case in data["cases"]:
         lines.append(f"- n={case['n']} {case['regime']}: field {case['field_check']:.1e}; Tsit5 launch velocity "
-                     f"{case['tsit5_agreement_at_1e-10']:.1e} apart; steps {case['tsit5_steps_at_1e-10']}")
+                     f"{case['tsit5_agreement_at_1e-10']:.1e} apart (the bare JAX loop "
+                     f"{case['jax_tsit5_agreement_at_1e-10']:.1e}); steps {case['tsit5_steps_at_1e-10']}")
+    lines += ["", "## Cost per step (rtol 1e-10, the same run)", "",
+              "hertz_chain through `prepare_launch`'s callable (no per-call preparation; the contact tracking, the "
+              "stopping event and diffrax's loop included), the same algorithm as a bare `jax.lax.while_loop` over "
+              "the library's field (`jax-tsit5`: the floor of a JAX program on this CPU), and the numba loop.", "",
+              "| case | hertz_chain us/step | bare JAX loop us/step | numba us/step | hertz_chain / JAX | JAX / numba |",
+              "|---|---|---|---|---|---|"]
+    for case in data["cases"]:
+        ps = case["per_step_us_at_1e-10"]
+        lines.append(f"| n={case['n']} {case['regime']} | {ps['library']:.2f} | {ps['jax']:.2f} | {ps['numba']:.2f} | "
+                     f"{ps['library'] / ps['jax']:.2f} | {ps['jax'] / ps['numba']:.2f} |")
+    lines += ["", "The numba loop called from a jitted JAX function through `jax.pure_callback` (the option \"a compiled "
+              "integrator called from JAX\"), rtol 1e-10, against the same loop called directly:", "",
+              "| case | numba direct (us) | from JAX (us) | crossing (us per solve) |", "|---|---|---|---|"]
+    for case in data["cases"]:
+        cb = case["numba_from_jax_at_1e-10"]
+        lines.append(f"| n={case['n']} {case['regime']} | {cb['direct_us']:.0f} | {cb['from_jax_us']:.0f} | "
+                     f"{cb['crossing_us']:.0f} |")
     text = "\n".join(lines) + "\n"
     if path:
         Path(path).write_text(text)
