@@ -69,15 +69,21 @@ def _cascade_over(t, ys, args, x, v, d, dd, closed, q=None):
     dust = jnp.sqrt(_QUIET) * scale[n]
     apart = (~closed & (dd <= dust)) | quiet | ~mask
     strict = (~closed & (dd <= 0)) | quiet | ~mask
+    # Every running sum below in one cumulative sum over a (6, n) stack: each `cumsum` (and `flip`) is an
+    # operation of its own in every step of the loop, which costs more than its arithmetic on the CPU.
+    kin = 0.5 * m * v**2
+    mech = m * (0.5 * v**2 + stack.gravity * x)
+    sums = jnp.cumsum(jnp.stack([m, m * v, kin, pot * (jnp.arange(n) >= 1), mech + pot,
+                                 (~apart).astype(m.dtype)]), axis=-1)
+    M, P, K, inner, energy, blocked = sums  # `inner`: interfaces 1..k-1 of masses 1..k; `energy`: masses 1..k
+    # and their contacts, k = 1..n; `blocked`: interfaces 0..k that are not apart (small integers: exact)
     # tail[k], k = 0..n: every interface j >= k + 1 is apart (vacuous for k >= n - 1)
-    tail = jnp.concatenate([jnp.flip(jnp.cumprod(jnp.flip(apart[1:]))) > 0, jnp.ones(2, bool)])
+    tail = jnp.concatenate([blocked[-1] - blocked == 0, jnp.ones(1, bool)])
     # A free group, masses 1..k (k = 1..n-1) off the ground: its internal energy (kinetic in its centre-of-
     # mass frame plus its inner contacts' elastic energy) bounds how fast its top mass k can ever move
     # relative to the group's centre of mass (gravity is common: the centre of mass frame is free fall);
     # when mass k+1 already moves away faster than that, the group can never push it again.
-    M, P = jnp.cumsum(m), jnp.cumsum(m * v)
-    inner = jnp.concatenate([jnp.zeros(1), jnp.cumsum(pot[1:])])  # interfaces 1..k-1
-    e_int = jnp.maximum(jnp.cumsum(0.5 * m * v**2) - 0.5 * P**2 / M + inner, 0.0)
+    e_int = jnp.maximum(K - 0.5 * P**2 / M + inner, 0.0)
     reach = jnp.sqrt(2.0 * e_int * (M - m) / (M * m))
     # its internal motion is negligible; or gravity acts, so the group falls back to the ground anyway:
     # its landing is a rebound, and its masses' velocities never become final
@@ -88,8 +94,6 @@ def _cascade_over(t, ys, args, x, v, d, dd, closed, q=None):
         return touched & free
     # above[k], k = 0..n: the masses above mass k fly apart (k >= 1: interface k strictly)
     above = tail & jnp.concatenate([jnp.ones(1, bool), strict[1:], jnp.ones(1, bool)])
-    mech = m * (0.5 * v**2 + stack.gravity * x)
-    energy = jnp.cumsum(mech) + jnp.cumsum(pot)  # masses 1..k and their contacts, k = 1..n
     bound = jnp.any((energy < 0) & above[1:])
     return touched & ((apart[0] & free) | bound)
 
