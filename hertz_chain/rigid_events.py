@@ -348,6 +348,9 @@ class RigidBatchResult:
       nothing ever meets), and the ends where `simulate_rigid` raises `SolverError`: `MAX_COLLISIONS`
       (2), `RESTING_CONTACT` (3), `NO_PREDICTION` (4: bodies approach with no predicted contact, a bug);
       with `until="top_launch"` also `TOP_LAUNCHED` (5: the top's launch is final, the run stopped there).
+    * `initial_velocities` `(B, n)`: the velocities given.
+    * `gains` `(B,)`: `top_launch_velocities / |initial velocity of mass 1|` (`RigidResult.gain` per stack,
+      NaN where it has no top launch or mass 1 starts at rest).
     """
 
     launch_velocities: np.ndarray
@@ -355,6 +358,16 @@ class RigidBatchResult:
     final_velocities: np.ndarray
     n_collisions: np.ndarray
     outcome: np.ndarray
+    initial_velocities: np.ndarray
+
+    @property
+    def gains(self) -> np.ndarray:
+        """`(B,)`: the top mass's launch velocity over mass 1's initial speed (paper Eq 19's `G_n =
+        V_n/v_ff` for a stack started at impact, as `RigidResult.gain`); NaN where `top_launch_velocities`
+        is NaN or mass 1 starts at rest."""
+        v1 = np.abs(self.initial_velocities[:, 0])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(v1 > 0, self.top_launch_velocities / np.where(v1 > 0, v1, 1.0), np.nan)
 
     @property
     def top_launch_velocities(self) -> np.ndarray:
@@ -443,6 +456,7 @@ def simulate_rigid_batch(masses, velocities, gaps, restitution, ground_restituti
             raise ParameterError(name, x.shape, f"a ({B}, {n}) array, one row per stack")
     if not np.all(np.isfinite(v)):
         raise ParameterError("velocities", "non-finite", "finite velocities")
+    v0 = v.copy()
     if not np.all(np.isfinite(gp) & (gp >= 0)):
         raise ParameterError("gaps", "negative or non-finite", "finite gaps >= 0")
     if not np.all(np.isfinite(e[:, 1:]) & (e[:, 1:] >= 0) & (e[:, 1:] <= 1)):
@@ -556,4 +570,4 @@ def simulate_rigid_batch(masses, velocities, gaps, restitution, ground_restituti
             v[gr, 0] = -e0[on_ground] * v[gr, 0]
             lv[gr, 0], lt[gr, 0] = v[gr, 0], t[on_ground]
         nc = nc + 1
-    return RigidBatchResult(_ro(out_lv), _ro(out_lt), _ro(out_vf), _ro(out_nc), _ro(out_code))
+    return RigidBatchResult(_ro(out_lv), _ro(out_lt), _ro(out_vf), _ro(out_nc), _ro(out_code), _ro(v0))

@@ -264,6 +264,9 @@ def test_batch_runs_every_stack_as_simulate_rigid_does(n, until):
                 np.testing.assert_array_equal(res.launch_velocities[i], ref.launch_velocities)
                 np.testing.assert_array_equal(res.launch_times[i], ref.launch_times)
                 np.testing.assert_array_equal(res.final_velocities[i], ref.final_velocities)
+                if code in (SEPARATED, TOP_LAUNCHED):  # the stack's RigidResult.gain, identical
+                    assert res.gains[i] == ref.gain
+    np.testing.assert_array_equal(res.initial_velocities, v)
     if n == 5:  # the early ends were exercised
         assert {SEPARATED, MAX_COLLISIONS, RESTING_CONTACT} <= seen if until == "separated" else TOP_LAUNCHED in seen
 
