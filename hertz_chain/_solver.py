@@ -145,7 +145,10 @@ class FlightController(dfx.AbstractAdaptiveStepSizeController):
             t0, t1, y0, y1_candidate, args, y_error, error_order, controller_state)
         y = jnp.where(keep, y1_candidate, y0)
         limit = flight_limit(args, y, self.max_step, self.fraction)
-        return keep, next_t0, next_t0 + jnp.minimum(next_t1 - next_t0, limit), made_jump, state, result
+        # as `PIDController(dtmax=limit)` computes it where the bound applies (`next_t0 + dtmax`), and the
+        # PID's own `next_t1` untouched where it does not: bit for bit the old path wherever limit = max_step
+        return (keep, next_t0, jnp.where(next_t1 - next_t0 > limit, next_t0 + limit, next_t1), made_jump, state,
+                result)
 
 
 class UnrolledTsit5(dfx.AbstractAdaptiveSolver):

@@ -41,9 +41,10 @@ def _cascade_over(t, ys, args, x, v, d, dd, closed, q=None):
       landings again (rebounds), never a push that reaches the masses flying apart above.
 
     or (with mass 1 off the ground, or without a ground) a group of masses `1..k` flying freely has
-    settled (without gravity: its internal energy `E_int`, kinetic in its centre-of-mass frame plus its
-    inner contacts' elastic energy, is below `_SETTLED` of its drop energy `M_k V^2/2`; under gravity
-    the group falls back to the ground, a rebound, so its masses never get final velocities) and can
+    settled (its internal energy `E_int`, kinetic in its centre-of-mass frame plus its inner contacts'
+    elastic energy, is below `_SETTLED` of its drop energy `M_k V^2/2`; or, under gravity with a ground,
+    the group falls back to the ground, a rebound, so its masses never get final velocities; without a
+    ground gravity is a common free fall and changes nothing of this) and can
     never push mass `k+1` again: mass `k+1` moves away from the group's centre of mass faster than any
     velocity `E_int` could give the group's top mass, `sqrt(2 E_int (M_k - m_k)/(M_k m_k))`. Every mass above the group then
     has its final launch; the masses of a settled or bound group report their velocities at the end of
@@ -87,7 +88,9 @@ def _cascade_over(t, ys, args, x, v, d, dd, closed, q=None):
     reach = jnp.sqrt(2.0 * e_int * (M - m) / (M * m))
     # its internal motion is negligible; or gravity acts, so the group falls back to the ground anyway:
     # its landing is a rebound, and its masses' velocities never become final
-    settled = (e_int <= _SETTLED * 0.5 * M * scale[n] ** 2) | (stack.gravity > 0)
+    settled = e_int <= _SETTLED * 0.5 * M * scale[n] ** 2
+    if stack.ground:  # without a ground gravity is a common free fall, changing nothing of the group's motion
+        settled = settled | (stack.gravity > 0)
     escapes = (~closed[1:] & settled[:-1] & (v[1:] - (P / M)[:-1] >= reach[:-1])) & tail[1:n]  # k = 1..n-1
     free = tail[0] | jnp.any(escapes)
     if not stack.ground:
@@ -117,7 +120,9 @@ def _top_final(v, d, closed, stack, touched_top, q=None):
         inner = jnp.sum(jnp.where(below & (jnp.arange(n) >= 1), pot, 0.0))
         e_int = jnp.maximum(jnp.sum(jnp.where(below, 0.5 * m * v**2, 0.0)) - 0.5 * P**2 / M + inner, 0.0)
         cap = P / M + jnp.sqrt(2.0 * e_int * (M - m[n - 2]) / (M * m[n - 2]))
-    return touched_top & ~closed[n - 1] & (stack.gravity <= 0) & (v[n - 1] >= cap)
+    # without a ground gravity is a common free fall: these relative speeds are all that matter
+    no_fall = (stack.gravity <= 0) if stack.ground else True
+    return touched_top & ~closed[n - 1] & no_fall & (v[n - 1] >= cap)
 
 
 def _cascade_complete(t, ys, args, **kwargs):
@@ -292,7 +297,9 @@ class _Contacts(eqx.Module):
             over = over | _top_final(v, d, active, stack, rows[n - 1, T_IN] >= 0, q)
         over = over & ~was_over
         # the top mass's apex: free, pushed before, its velocity turned from up to down
-        apex = ~active[n - 1] & (rows[n - 1, T_IN] >= 0) & (c.cascade[4] > 0) & (v_top <= 0)
+        # (with a ground only: without one gravity is a common free fall, and the top's fall toward the masses
+        # below is no landing; it meets them again only as it would without gravity, a push)
+        apex = ~active[n - 1] & (rows[n - 1, T_IN] >= 0) & (c.cascade[4] > 0) & (v_top <= 0) & stack.ground
         rebound = (c.cascade[1] > 0) | jnp.any(frozen & active & ~c.now)  # closes after it was open
         head = jnp.stack([(was_over | over), rebound, jnp.where(over, t[0], c.cascade[2]),
                           top_done | apex | over, v_top]).astype(d.dtype)
