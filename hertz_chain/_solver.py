@@ -151,36 +151,40 @@ class FlightController(dfx.AbstractAdaptiveStepSizeController):
                 result)
 
 
-class UnrolledTsit5(dfx.AbstractAdaptiveSolver):
-    """Tsitouras' 5(4) pair (Tsitouras 2011, *Comput. Math. Appl.* 62, 770), diffrax's tableau and
-    interpolation, with its seven stages written out rather than looped over.
+class UnrolledERK(dfx.AbstractAdaptiveSolver):
+    """An explicit Runge–Kutta pair with the first-same-as-last and solution-is-last-stage properties
+    (diffrax's `tableau.fsal` and `ssal`: Tsit5, Dopri5, Dopri8), diffrax's tableau and interpolation,
+    with its stages written out rather than looped over.
 
     diffrax's Runge–Kutta solvers run the stages through an inner while loop (general PyTrees, implicit
     tableaus, one compiled stage); for the few dozen numbers of a stack's state the loop's bookkeeping
     costs more than the vector field. Unrolled, XLA fuses each stage into the next: the same arithmetic
-    (to rounding) in fewer, larger operations. First same as last: the solver state is `f(t0, y0)`; the
+    (to rounding) in fewer, larger operations. The solver state is `f(t0, y0)` (first same as last); the
     stack is never solved with jumps (`made_jump` is always False: no `jump_ts`, no events that restart).
-    For one flat array state and an ODE term only.
+    For one flat array state and an ODE term only. Subclasses set `tableau`, `interpolation_cls` and
+    `method_order`.
     """
 
     term_structure: ClassVar = dfx.AbstractTerm
-    interpolation_cls: ClassVar = dfx.Tsit5.interpolation_cls
+    tableau: ClassVar[Any]
+    interpolation_cls: ClassVar[Any]
+    method_order: ClassVar[int]
 
     def order(self, terms):
-        return 5
+        return self.method_order
 
     def init(self, terms, t0, t1, y0, args):
         return terms.vf(t0, y0, args)
 
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
         del made_jump
-        tab = dfx.Tsit5.tableau
+        tab = self.tableau
         dt = terms.contr(t0, t1)
         ks = [solver_state * dt]
         for a_row, c in zip(tab.a_lower, tab.c):
             yi = y0 + sum(float(a) * k for a, k in zip(a_row, ks) if a != 0)
             ks.append(terms.vf(t0 + float(c) * dt, yi, args) * dt)
-        y1 = yi  # Tsit5's last stage is evaluated at y1 (b_sol equals the last row: "ssal")
+        y1 = yi  # the last stage is evaluated at y1 (b_sol equals the last row: "ssal")
         y_error = sum(float(b) * k for b, k in zip(tab.b_error, ks) if b != 0)
         f1 = ks[-1] / dt
         dense_info = dict(y0=y0, y1=y1, k=jnp.stack(ks))
@@ -190,11 +194,39 @@ class UnrolledTsit5(dfx.AbstractAdaptiveSolver):
         return terms.vf(t0, y0, args)
 
 
+class UnrolledTsit5(UnrolledERK):
+    """Tsitouras' 5(4) pair (Tsitouras 2011, *Comput. Math. Appl.* 62, 770), unrolled (`UnrolledERK`): the
+    default solver."""
+
+    tableau: ClassVar = dfx.Tsit5.tableau
+    interpolation_cls: ClassVar = dfx.Tsit5.interpolation_cls
+    method_order: ClassVar[int] = 5
+
+
+class UnrolledDopri8(UnrolledERK):
+    """Dormand–Prince 8(7) (Prince & Dormand 1981, *J. Comput. Appl. Math.* 7, 67; dense output of
+    Bogacki & Shampine 1990), unrolled (`UnrolledERK`): 14 stages a step."""
+
+    tableau: ClassVar = dfx.Dopri8.tableau
+    interpolation_cls: ClassVar = dfx.Dopri8.interpolation_cls
+    method_order: ClassVar[int] = 8
+
+
+class UnrolledDopri5(UnrolledERK):
+    """Dormand–Prince 5(4) (Dormand & Prince 1980, *J. Comput. Appl. Math.* 6, 19), unrolled
+    (`UnrolledERK`)."""
+
+    tableau: ClassVar = dfx.Dopri5.tableau
+    interpolation_cls: ClassVar = dfx.Dopri5.interpolation_cls
+    method_order: ClassVar[int] = 5
+
+
 def make_solver(name: str | dfx.AbstractSolver, tolerances: Tolerances | None = None) -> dfx.AbstractSolver:
     """A diffrax solver from a name of `hertz_chain.registry.SOLVERS` (`"tsit5"`, the default: this
-    module's `UnrolledTsit5`; `"tsit5-diffrax"`, `"dopri5"`, `"dopri8"`, `"kvaerno5"` (implicit, with a
-    Chord iteration that terminates properly), `"kvaerno5-stock"`). A solver instance is returned
-    unchanged.
+    module's `UnrolledTsit5`; `"dopri5"`, `"dopri8"`, unrolled the same way (`UnrolledDopri5`,
+    `UnrolledDopri8`); `"tsit5-diffrax"`, `"dopri5-diffrax"`, `"dopri8-diffrax"`, diffrax's own;
+    `"kvaerno5"` (implicit, with a Chord iteration that terminates properly), `"kvaerno5-stock"`). A solver
+    instance is returned unchanged.
 
     **Raises** `ParameterError` for a name that is not in the registry."""
     if isinstance(name, dfx.AbstractSolver):

@@ -173,10 +173,13 @@ def _diffrax(name: str) -> Callable[[Any], Any]:
     return make
 
 
-def _unrolled_tsit5(tolerances):
-    from .simulation import UnrolledTsit5
+def _unrolled(name):
+    def make(tolerances):
+        from . import _solver
 
-    return UnrolledTsit5()
+        return getattr(_solver, name)()
+
+    return make
 
 
 def _kvaerno5_chord(tolerances):
@@ -199,10 +202,12 @@ class SolverRow:
 
 
 SOLVERS: dict[str, SolverRow] = {row.name: row for row in (
-    SolverRow("tsit5", _unrolled_tsit5, "Tsitouras 5(4) with its stages written out (the default)"),
+    SolverRow("tsit5", _unrolled("UnrolledTsit5"), "Tsitouras 5(4) with its stages written out (the default)"),
     SolverRow("tsit5-diffrax", _diffrax("Tsit5"), "diffrax's Tsit5: the same method, its stages in a loop"),
-    SolverRow("dopri5", _diffrax("Dopri5"), "Dormand–Prince 5(4)"),
-    SolverRow("dopri8", _diffrax("Dopri8"), "Dormand–Prince 8(7)"),
+    SolverRow("dopri5", _unrolled("UnrolledDopri5"), "Dormand–Prince 5(4), its stages written out"),
+    SolverRow("dopri5-diffrax", _diffrax("Dopri5"), "diffrax's Dopri5: the same method, its stages in a loop"),
+    SolverRow("dopri8", _unrolled("UnrolledDopri8"), "Dormand–Prince 8(7), its stages written out"),
+    SolverRow("dopri8-diffrax", _diffrax("Dopri8"), "diffrax's Dopri8: the same method, its stages in a loop"),
     SolverRow("kvaerno5", _kvaerno5_chord, "Kvaerno5, implicit, with a Chord iteration that terminates properly"),
     SolverRow("kvaerno5-stock", _diffrax("Kvaerno5"), "diffrax 0.7.2's Kvaerno5 as shipped (VeryChord)"),
 )}

@@ -2,6 +2,7 @@
 
 import jax.numpy as jnp
 import numpy as np
+import pytest
 from _helpers import G
 from _helpers import mvg as _mvg
 
@@ -24,25 +25,28 @@ def test_convergence_with_tolerance():
     assert errs[3] < 1e-7
 
 
-def test_unrolled_tsit5_equals_diffrax_tsit5():
-    # Reference: diffrax's own Tsit5 (same tableau, stages in a loop): one step of a nonlinear system
+@pytest.mark.parametrize("name", ["Tsit5", "Dopri5", "Dopri8"])
+def test_unrolled_solvers_equal_diffraxs(name):
+    # Reference: diffrax's own solver (same tableau, stages in a loop): one step of a nonlinear system
     # agrees to rounding in the solution, the error estimate and the dense output; a fixed-step solve too.
     import diffrax as dfx
 
-    from hertz_chain.simulation import UnrolledTsit5
+    from hertz_chain import _solver
 
+    unrolled, stock = getattr(_solver, "Unrolled" + name)(), getattr(dfx, name)()
     term = dfx.ODETerm(lambda t, y, a: jnp.stack([y[1], -jnp.sin(y[0]) - a * y[1] * jnp.abs(y[1]) + jnp.cos(3 * t)]))
     y0, args, t0, t1 = jnp.array([0.3, -1.2]), 0.7, 0.1, 0.35
     out = []
-    for solver in (UnrolledTsit5(), dfx.Tsit5()):
+    for solver in (unrolled, stock):
         state = solver.init(term, t0, t1, y0, args)
         y1, err, dense, _, _ = solver.step(term, t0, t1, y0, args, state, False)
         mid = solver.interpolation_cls(t0=t0, t1=t1, **dense).evaluate(0.2)
         out.append((y1, err, mid))
+    assert unrolled.order(term) == stock.order(term)
     for a, b in zip(*out):  # atol: rounding of sums of O(1) stage values (the error estimate cancels)
         np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-15)
     sols = [dfx.diffeqsolve(term, s, 0.0, 5.0, 0.01, y0, args=args, stepsize_controller=dfx.ConstantStepSize(),
-                            saveat=dfx.SaveAt(ts=jnp.linspace(0, 5, 11))).ys for s in (UnrolledTsit5(), dfx.Tsit5())]
+                            saveat=dfx.SaveAt(ts=jnp.linspace(0, 5, 11))).ys for s in (unrolled, stock)]
     np.testing.assert_allclose(sols[0], sols[1], rtol=1e-11, atol=1e-13)
 
 
