@@ -143,12 +143,18 @@ class FlightController(dfx.AbstractAdaptiveStepSizeController):
     def adapt_step_size(self, t0, t1, y0, y1_candidate, args, y_error, error_order, controller_state):
         keep, next_t0, next_t1, made_jump, state, result = self.pid.adapt_step_size(
             t0, t1, y0, y1_candidate, args, y_error, error_order, controller_state)
-        y = jnp.where(keep, y1_candidate, y0)
-        limit = flight_limit(args, y, self.max_step, self.fraction)
+        # The bound of the state the next step starts from. After a rejection that is `y0` again, whose bound
+        # the rejected step kept, and the PID shrinks the step: nothing to do. So only `y1_candidate`'s is
+        # needed (the state the tracking has just read, which XLA shares).
+        limit = flight_limit(args, y1_candidate, self.max_step, self.fraction)
         # as `PIDController(dtmax=limit)` computes it where the bound applies (`next_t0 + dtmax`), and the
         # PID's own `next_t1` untouched where it does not: bit for bit the old path wherever limit = max_step
-        return (keep, next_t0, jnp.where(next_t1 - next_t0 > limit, next_t0 + limit, next_t1), made_jump, state,
-                result)
+        clip = keep & (next_t1 - next_t0 > limit)
+        return keep, next_t0, jnp.where(clip, next_t0 + limit, next_t1), made_jump, state, result
+
+
+#: largest state (entries) that `UnrolledERK` steps with its stages written out; above, diffrax's loop
+UNROLL_MAX_STATE = 128
 
 
 class UnrolledERK(dfx.AbstractAdaptiveSolver):
@@ -161,22 +167,38 @@ class UnrolledERK(dfx.AbstractAdaptiveSolver):
     costs more than the vector field. Unrolled, XLA fuses each stage into the next: the same arithmetic
     (to rounding) in fewer, larger operations. The solver state is `f(t0, y0)` (first same as last); the
     stack is never solved with jumps (`made_jump` is always False: no `jump_ts`, no events that restart).
-    For one flat array state and an ODE term only. Subclasses set `tableau`, `interpolation_cls` and
-    `method_order`.
+    For one flat array state and an ODE term only. Subclasses set `tableau`, `interpolation_cls`,
+    `method_order` and `stock`, diffrax's own solver of the same method.
+
+    Written out pays only for small states: from ~30 masses on (a state of `UNROLL_MAX_STATE` = 128
+    entries) diffrax's loop, which fills one buffer of stages, is as fast or faster (measured on the
+    Nesterenko chain, `benchmarks/long_chains.py`: Dopri8 at n = 100 / 300 / 1,000 took 64 / 317 / 2,557
+    ms written out against 51 / 218 / 1,664 ms in diffrax's loop; equal at n = 30; at n = 10, 8.4 against
+    13.9 us per step), so above it the step is diffrax's (`stock`; the shape is static: one or the other
+    per compiled solve). `scan_kind` is passed to it (diffrax sets it for forward-mode adjoints).
     """
 
     term_structure: ClassVar = dfx.AbstractTerm
     tableau: ClassVar[Any]
     interpolation_cls: ClassVar[Any]
     method_order: ClassVar[int]
+    stock: ClassVar[Any]
+    scan_kind: str | None = None  # a plain field, as diffrax's (`_Tracked.around` sets it with `eqx.tree_at`)
+
+    def _large(self, y0) -> bool:
+        return y0.shape[0] > UNROLL_MAX_STATE
 
     def order(self, terms):
         return self.method_order
 
     def init(self, terms, t0, t1, y0, args):
+        if self._large(y0):
+            return self.stock(scan_kind=self.scan_kind).init(terms, t0, t1, y0, args)
         return terms.vf(t0, y0, args)
 
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
+        if self._large(y0):
+            return self.stock(scan_kind=self.scan_kind).step(terms, t0, t1, y0, args, solver_state, made_jump)
         del made_jump
         tab = self.tableau
         dt = terms.contr(t0, t1)
@@ -200,6 +222,7 @@ class UnrolledTsit5(UnrolledERK):
 
     tableau: ClassVar = dfx.Tsit5.tableau
     interpolation_cls: ClassVar = dfx.Tsit5.interpolation_cls
+    stock: ClassVar = dfx.Tsit5
     method_order: ClassVar[int] = 5
 
 
@@ -209,6 +232,7 @@ class UnrolledDopri8(UnrolledERK):
 
     tableau: ClassVar = dfx.Dopri8.tableau
     interpolation_cls: ClassVar = dfx.Dopri8.interpolation_cls
+    stock: ClassVar = dfx.Dopri8
     method_order: ClassVar[int] = 8
 
 
@@ -218,6 +242,7 @@ class UnrolledDopri5(UnrolledERK):
 
     tableau: ClassVar = dfx.Dopri5.tableau
     interpolation_cls: ClassVar = dfx.Dopri5.interpolation_cls
+    stock: ClassVar = dfx.Dopri5
     method_order: ClassVar[int] = 5
 
 

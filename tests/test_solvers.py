@@ -48,6 +48,16 @@ def test_unrolled_solvers_equal_diffraxs(name):
     sols = [dfx.diffeqsolve(term, s, 0.0, 5.0, 0.01, y0, args=args, stepsize_controller=dfx.ConstantStepSize(),
                             saveat=dfx.SaveAt(ts=jnp.linspace(0, 5, 11))).ys for s in (unrolled, stock)]
     np.testing.assert_allclose(sols[0], sols[1], rtol=1e-11, atol=1e-13)
+    # above UNROLL_MAX_STATE entries the step is diffrax's own (its loop is faster there): identical, and
+    # a forward-mode adjoint's scan kind reaches it through the tracking wrapper
+    from hertz_chain._tracking import _Tracked
+
+    big = jnp.linspace(-1.0, 1.0, _solver.UNROLL_MAX_STATE + 2)
+    wave = dfx.ODETerm(lambda t, y, a: jnp.roll(y, 1) - a * y)
+    steps = [s.step(wave, 0.0, 0.1, big, 0.3, s.init(wave, 0.0, 0.1, big, 0.3), False)[:2] for s in (unrolled, stock)]
+    for a, b in zip(*steps):
+        np.testing.assert_array_equal(a, b)
+    assert _Tracked.around(unrolled, dfx.ForwardMode(), audit=False).solver.scan_kind == "lax"
 
 
 def test_kvaerno5_newton_fix():
