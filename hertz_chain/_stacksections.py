@@ -619,7 +619,8 @@ def _parse_solver(raw: Any) -> SolverSpec:
     until = _choice(t["until"], "solver.until", UNTIL) if "until" in t else "cascade"
     if until == "t_max" and t_max is None:
         raise _error("solver.until", "'t_max' needs solver.t_max (the time to run to)")
-    return SolverSpec(solver, rtol, atol, t_max, max_steps, n_output, dt_output, until)
+    flight = _bool(t["flight_steps"], "solver.flight_steps") if "flight_steps" in t else True
+    return SolverSpec(solver, rtol, atol, t_max, max_steps, n_output, dt_output, until, flight)
 
 
 def parse_srs_table(table: Any, where: str) -> tuple[tuple[float, float], ...]:

@@ -80,7 +80,7 @@ _CONTACT_KEYS = (
     "damping",
     "clamp",
 ) + tuple(dict.fromkeys(key for row in LAWS.values() for key, _ in row.params))  # e.g. thornton's yield_pressure
-_SOLVER_KEYS = ("solver", "rtol", "atol", "t_max", "until", "max_steps", "n_output", "dt_output")
+_SOLVER_KEYS = ("solver", "rtol", "atol", "t_max", "until", "max_steps", "n_output", "dt_output", "flight_steps")
 
 
 # --------------------------------------------------------------------------------------------------
@@ -253,6 +253,7 @@ class SolverSpec:
     n_output: int | None = None
     dt_output: float | None = None
     until: str = "cascade"
+    flight_steps: bool = True  # `Tolerances.flight_steps`: long steps through free flights
 
 
 @dataclass(frozen=True)

@@ -486,6 +486,14 @@ def test_solver_settings():
     assert_one_line_error(patched({"solver.rtol": 2}), "solver.rtol", "(0, 1)")
     assert_one_line_error(patched({"solver.max_steps": 10.5}), "solver.max_steps", "integer")
     assert_one_line_error(patched({"solver.t_max": "1 m"}), "solver.t_max", "a time")
+    # free-flight steps: on by default, off on request, into the built solve's Tolerances
+    from hertz_chain.builder import build
+
+    assert s.flight_steps is True
+    off = parse_stack(patched({"solver.flight_steps": False}))
+    assert off.solver.flight_steps is False
+    assert build(off).simulate_options["tolerances"].flight_steps is False
+    assert_one_line_error(patched({"solver.flight_steps": "no"}), "solver.flight_steps", "true or false")
     assert_one_line_error(patched({"solver.n_output": 1}), "solver.n_output", ">= 2")
 
 
