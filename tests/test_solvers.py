@@ -69,7 +69,9 @@ def test_kvaerno5_newton_fix():
     explicit = simulate(stack, s0, tolerances=tol)
     fixed = simulate(stack, s0, solver="kvaerno5", tolerances=tol)
     stock = simulate(stack, s0, solver="kvaerno5-stock", tolerances=tol)
-    assert fixed.num_rejected_steps < stock.num_rejected_steps / 2
-    assert fixed.num_steps < stock.num_steps
+    # measured 54-58 against 109-116 rejected and 236-240 against 447-469 steps (the counts move by a few
+    # with the rounding of the step sequence): about half; bounded at three quarters to stay off that noise
+    assert fixed.num_rejected_steps < 0.75 * stock.num_rejected_steps
+    assert fixed.num_steps < 0.75 * stock.num_steps
     # both within their own global error (~100 x tol, see test_convergence_with_tolerance)
     np.testing.assert_allclose(fixed.launch_velocities, explicit.launch_velocities, rtol=1e-5)
