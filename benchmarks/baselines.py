@@ -283,7 +283,7 @@ def batched(quick: bool, designs: int = 1024, rtol: float = 1e-9) -> dict:
 
 
 # ============================================================================ the JAX floor
-def jax_tsit5_solver(stack):
+def jax_tsit5_solver():
     """The numba loop's algorithm (`tsit5`: Tsit5, the library's PI controller and flight bound, the RMS
     norm) as a bare `jax.lax.while_loop` over the library's own scaled field (`_scaled_field`, onset
     proxies and flag entry included), jitted once: the fastest a JAX program of this algorithm runs on
@@ -396,7 +396,7 @@ class Case:
         import jax
 
         if not hasattr(self, "_jax_solve"):
-            self._jax_solve = jax_tsit5_solver(self.stack)
+            self._jax_solve = jax_tsit5_solver()
             self._jax_args = FieldArgs(self.stack, self.scale, self.T)
         y0 = np.append(self.y0p, 0.0)
         run = lambda: jax.block_until_ready(self._jax_solve(y0, self.t1, rtol, self._jax_args))  # noqa: E731

@@ -145,7 +145,7 @@ class FlightController(dfx.AbstractAdaptiveStepSizeController):
             t0, t1, y0, y1_candidate, args, y_error, error_order, controller_state)
         # The bound of the state the next step starts from. After a rejection that is `y0` again, whose bound
         # the rejected step kept, and the PID shrinks the step: nothing to do. So only `y1_candidate`'s is
-        # needed (the state the tracking has just read, which XLA shares).
+        # needed.
         limit = flight_limit(args, y1_candidate, self.max_step, self.fraction)
         # as `PIDController(dtmax=limit)` computes it where the bound applies (`next_t0 + dtmax`), and the
         # PID's own `next_t1` untouched where it does not: bit for bit the old path wherever limit = max_step
