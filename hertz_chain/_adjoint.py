@@ -210,7 +210,9 @@ def _smooth_onsets(stack) -> bool:
 @eqx.filter_custom_vjp
 def _replayed_solve(diff, t1s, scale, T, cfg: _SolveConfig) -> dict:
     """`_solve_record` of the solve from `diff = (stack, y0s)`, differentiable in reverse mode by a discrete
-    adjoint over the accepted steps (`_replay_bwd`). Undifferentiated, it is the lean solve."""
+    adjoint over the accepted steps (`_replay_bwd`). Undifferentiated, it is the lean solve, landing its
+    onsets (`Tolerances.land_onsets`); differentiated, the solve does not land them (the replay takes its own
+    steps at onsets), so its value can differ from the undifferentiated one within the tolerance."""
     stack, y0s = diff
     return _solve_record(_diffeqsolve(stack, y0s, t1s, scale, T, None, cfg, history=False, audit=False))
 
@@ -219,7 +221,7 @@ def _replayed_solve(diff, t1s, scale, T, cfg: _SolveConfig) -> dict:
 def _replay_fwd(perturbed, diff, t1s, scale, T, cfg: _SolveConfig):
     del perturbed
     stack, y0s = diff
-    sol = _diffeqsolve(stack, y0s, t1s, scale, T, None, cfg, history=True, audit=False)
+    sol = _diffeqsolve(stack, y0s, t1s, scale, T, None, cfg, history=True, audit=False, land=False)
     core = _solve_record(sol)
     # per interface: the history index of the point recorded in `_Contacts.rows` (the first accepted
     # point after its last contact), found by its time (the same float), and whether there is one

@@ -17,7 +17,7 @@ from . import _config  # noqa: F401  (float64)
 from ._export import cached_jit
 from ._law_base import _positive_part
 from ._scaling import FieldArgs, Scales, _default_t_max, _scales
-from ._solver import _SolveConfig
+from ._solver import UNROLL_MAX_STATE, UnrolledERK, _SolveConfig
 from ._tracking import (
     PEAK_FORCE,
     T_FIRST_IN,
@@ -98,9 +98,23 @@ def _setup(stack: Stack, state: State, t_max, cfg: _SolveConfig):
     return sc, scale, y0s, t1 / sc.time
 
 
-def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _SolveConfig, history: bool, audit: bool):
+def _lands_onsets(cfg: _SolveConfig, y0s) -> bool:
+    """Whether a solve lands its onsets and steps through them in `s` (`Tolerances.land_onsets`): only
+    with an unrolled solver (`UnrolledERK`) that writes out the step (a state of at most `UNROLL_MAX_STATE`
+    entries)."""
+    return (cfg.tolerances.land_onsets and isinstance(cfg.solver, UnrolledERK)
+            and y0s.shape[0] <= UNROLL_MAX_STATE)
+
+
+def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _SolveConfig, history: bool, audit: bool,
+                 land: bool = True):
     """The one call to `diffrax.diffeqsolve` (scaled state and time). Saves, in `sol.ys`/`sol.ts` in
-    this order: the accepted steps with `t0` (if `history`), the times `ts_s` (if given), `t1`."""
+    this order: the accepted steps with `t0` (if `history`), the times `ts_s` (if given), `t1`. `land`:
+    whether onsets may be landed (`_lands_onsets`; False for the replayed adjoint, whose replay takes its
+    own steps at onsets)."""
+    onsets = land and _lands_onsets(cfg, y0s)
+    solver = (dataclasses.replace(cfg.solver, onsets=True, window=cfg.tolerances.onset_window) if onsets
+              else cfg.solver)
     subs = []
     if history:
         subs.append(dfx.SubSaveAt(t0=True, steps=True))
@@ -109,7 +123,7 @@ def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _SolveConfig, hist
     subs.append(dfx.SubSaveAt(t1=True))
     return dfx.diffeqsolve(
         dfx.ODETerm(_scaled_field),
-        _Tracked.around(cfg.solver, cfg.adjoint, audit=audit, launch=cfg.until == "launch", durations=cfg.durations),
+        _Tracked.around(solver, cfg.adjoint, audit=audit, launch=cfg.until == "launch", durations=cfg.durations),
         t0=0.0,
         t1=t1s,
         dt0=cfg.tolerances.first_step,
@@ -117,7 +131,7 @@ def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _SolveConfig, hist
         args=FieldArgs(stack, scale, T, y0s[stack.n : 2 * stack.n],
                        scale[0] / (stack.effective_masses() * scale[stack.n] ** 2)),
         saveat=dfx.SaveAt(subs=subs, solver_state=True),
-        stepsize_controller=cfg.tolerances.controller(),
+        stepsize_controller=cfg.tolerances.controller(onsets=onsets),
         event=dfx.Event(_cascade_complete) if cfg.until != "t_max" else None,
         max_steps=cfg.max_steps,
         adjoint=cfg.adjoint,

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import functools
 from typing import Any, ClassVar
 
 import diffrax as dfx
@@ -34,6 +35,18 @@ class Tolerances(eqx.Module):
       ~10 steps instead of one per half contact time (hundreds). Near a closure (`t_j` below
       `max_step / flight_fraction`) the steps are those of `max_step`, as without it.
     - `flight_fraction`: that fraction (0 < f < 1; default 0.8).
+    - `land_onsets`: meet every contact onset with a step end, and step through the contact's start in
+      `s = (t - t*)^{1/4}` (`t*` the onset). After each accepted step the controller predicts, for every
+      open interface, when it closes (the parabola of its overlap, with the overlap's acceleration from
+      the step's two ends: exact in free flight) and ends the next step there if it would pass it; a
+      step that starts with an interface closing at an overlap within `ONSET_OVERLAP` of zero starts an
+      onset window of `onset_window` contact times in which the steps of the unrolled solvers
+      (`UnrolledERK`) are taken in `s` and the controller chooses them in `s`: the motion, non-smooth in
+      `t` (`F ~ delta^{3/2}`, `delta^{1/4} delta'`), is a power series in `s`, so the steps grow at
+      once instead of over ~50 steps. Only with an unrolled solver on a state of at most
+      `UNROLL_MAX_STATE` entries, and not in `launch_velocity`'s replayed reverse mode (whose replay
+      takes its own steps at onsets); else off. Default on (docs/solver-defaults.md, "Onsets met").
+    - `onset_window`: that window, in contact times (> 0; default 0.05).
     - `first_step`: the first step, in units of `T`.
     - `resolve_onsets`: add one auxiliary state per interface, `z_j' = sqrt(delta_j+/L) + sqrt(F_j/F_s)`
       (`F_s = m*_j V^2/L`), whose local error is `O(h^1.5)` where a contact starts (where `F ~ delta^{3/2}`
@@ -55,6 +68,8 @@ class Tolerances(eqx.Module):
     resolve_onsets: bool = eqx.field(static=True, default=True)
     flight_steps: bool = eqx.field(static=True, default=True)
     flight_fraction: float = eqx.field(static=True, default=0.8)
+    land_onsets: bool = eqx.field(static=True, default=True)
+    onset_window: float = eqx.field(static=True, default=0.05)
 
     def __check_init__(self):
         for name in ("rtol", "atol", "max_step", "first_step"):
@@ -68,16 +83,24 @@ class Tolerances(eqx.Module):
         f = self.flight_fraction
         if not (isinstance(f, (int, float)) and 0 < f < 1):
             raise ParameterError("flight_fraction", f, "a number with 0 < flight_fraction < 1")
+        for name in ("flight_steps", "land_onsets", "resolve_onsets"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise ParameterError(name, getattr(self, name), "True or False")
+        w = self.onset_window
+        if not (isinstance(w, (int, float)) and not isinstance(w, bool) and np.isfinite(w) and w > 0):
+            raise ParameterError("onset_window", w, "a finite number > 0 (contact times)")
 
-    def controller(self) -> dfx.AbstractAdaptiveStepSizeController:
+    def controller(self, onsets: bool = False) -> dfx.AbstractAdaptiveStepSizeController:
         """The step-size controller: diffrax's `PIDController`, with `max_step` as its largest step, or
-        (`flight_steps`) `FlightController` around it."""
-        if not self.flight_steps:
+        (`flight_steps`, or `onsets`: the solve lands its onsets, `land_onsets` where the solver can)
+        `FlightController` around it."""
+        if not self.flight_steps and not onsets:
             return dfx.PIDController(
                 rtol=self.rtol, atol=self.atol, pcoeff=self.pcoeff, icoeff=self.icoeff, dtmax=self.max_step
             )
         pid = dfx.PIDController(rtol=self.rtol, atol=self.atol, pcoeff=self.pcoeff, icoeff=self.icoeff)
-        return FlightController(pid, self.max_step, self.flight_fraction)
+        return FlightController(pid, self.max_step, self.flight_fraction, self.flight_steps, onsets,
+                                self.onset_window)
 
 
 def _closure_times(delta, rate, acc):
@@ -112,14 +135,93 @@ def flight_limit(args, ys, max_step: float, fraction: float):
     return jnp.where(free, jnp.maximum(max_step, fraction * jnp.min(t) / args.T), max_step)
 
 
+#: an interface whose overlap is within this many overlap scales `L` of zero, closing, starts an onset
+#: window (`Tolerances.land_onsets`); the landing puts a step end within ~1e-14 `L` of the onset in free
+#: flight, and within this of it after a few steps in contact
+ONSET_OVERLAP = 1e-9
+#: no landing step shorter than this many float64 roundings of the time (a run of thousands of contact
+#: times resolves time to ~1e-12 T only: a shorter step would not move)
+LANDING_MIN_ULPS = 1024.0
+#: ... closing faster than this many velocity scales (a gentler closing is smooth enough in `t`)
+ONSET_MIN_RATE = 1e-3
+#: the first step in an onset window, in `s = (t - t*)^{1/4}` (units `T^{1/4}`): `0.05^4 = 6e-6 T`
+ONSET_FIRST_S = 0.05
+
+
+def _overlaps_and_rates(args, ys):
+    """Every interface's overlap and its rate (SI) of a scaled state (`_solve._scaled_field`'s layout)."""
+    stack, scale, n = args.stack, args.scale, args.stack.n
+    x, v = ys[:n] * scale[:n], ys[n : 2 * n] * scale[n : 2 * n]
+    return stack.overlaps(x), stack.overlap_rates(v)
+
+
+def onset_at(args, ys):
+    """Whether a contact starts at the scaled state `ys`: an interface at an overlap within
+    `ONSET_OVERLAP` overlap scales of zero, closing faster than `ONSET_MIN_RATE` velocity scales."""
+    d, r = _overlaps_and_rates(args, ys)
+    return _starts(args, d, r)
+
+
+def _starts(args, d, r):
+    scale, n = args.scale, args.stack.n
+    return jnp.any(args.stack.interface_mask() & (jnp.abs(d) <= ONSET_OVERLAP * scale[0])
+                   & (r > ONSET_MIN_RATE * scale[n]))
+
+
+def flight_and_landing(args, y0, y1, h, max_step: float, fraction: float, flight: bool):
+    """From an accepted step `y0 -> y1` of scaled length `h`: the largest next step (`flight_limit`, or
+    `max_step` without `flight`), the scaled time from `y1` to the first closure of an interface open
+    there (overlap below `-ONSET_OVERLAP L`; `inf` if none), and whether a contact starts at `y1`
+    (`onset_at`), from one evaluation of the overlaps. Each overlap is a parabola: in free flight with
+    the exact free accelerations (`flight_limit`), else with the overlap's acceleration
+    `(rate(y1) - rate(y0)) / h` over the step. The times carry no gradient (as the PID's)."""
+    stack, scale, T, n = args.stack, args.scale, args.T, args.stack.n
+    x1 = y1[:n] * scale[:n]
+    d1, r1 = _overlaps_and_rates(args, y1)
+    r0 = stack.overlap_rates(y0[n : 2 * n] * scale[n : 2 * n])
+    mask = stack.interface_mask()
+    free = jnp.all(jnp.where(mask, d1 < 0, True)) & (not stack.wall)
+    acc = jnp.where(free, stack.overlaps(stack.accelerations(jnp.zeros_like(x1), x1)),
+                    (r1 - r0) / (jnp.maximum(h, 1e-300) * T))
+    t = jax.lax.stop_gradient(_closure_times(jnp.minimum(d1, 0.0), r1, acc) / T)
+    land = jnp.min(jnp.where(mask & (d1 < -ONSET_OVERLAP * scale[0]), t, jnp.inf))
+    limit = jnp.asarray(max_step, y1.dtype)
+    if flight:  # every open gap counts here, the nearly closed ones too
+        limit = jnp.where(free, jnp.maximum(max_step, fraction * jnp.min(jnp.where(mask, t, jnp.inf))), max_step)
+    return limit, land, _starts(args, d1, r1)
+
+
+def _in_window(t0, t_star, window):
+    return (t0 >= t_star) & (t0 - t_star < window)
+
+
+def _root4(x):
+    return jnp.sqrt(jnp.sqrt(x))
+
+
+def _s_ends(win, t0, t1, t_star):
+    """`[s0, s1] = (t - t*)^{1/4}` at a step's ends in an onset window (any positive numbers outside one)."""
+    return _root4(jnp.where(win, jnp.stack([t0, t1]) - t_star, jnp.array([1.0, 2.0])))
+
+
 class FlightController(dfx.AbstractAdaptiveStepSizeController):
     """diffrax's `PIDController` (without `dtmax`) whose next step is at most `flight_limit` of the
     state it starts from: `max_step` contact times in contact, longer in free flight
-    (`Tolerances.flight_steps`). The PID's own choice, acceptance and state are untouched."""
+    (`Tolerances.flight_steps`; `flight=False`: `max_step` always). The PID's own choice, acceptance and
+    state are untouched.
+
+    With `onsets` (`Tolerances.land_onsets`) it also lands every contact onset it can predict
+    (`flight_and_landing`: the next step ends there if it would pass it), and inside an onset window (a step
+    that starts at `onset_at`, for `window` contact times) it runs the PID on `s = (t - t*)^{1/4}`, the
+    variable the solver steps in there (`UnrolledERK` with `onsets`): the first step of a window is
+    `ONSET_FIRST_S` in `s`. Its state is then `(PID state, t*)` (`t* = -inf` before the first onset)."""
 
     pid: dfx.PIDController
     max_step: float = eqx.field(static=True)
     fraction: float = eqx.field(static=True)
+    flight: bool = eqx.field(static=True, default=True)
+    onsets: bool = eqx.field(static=True, default=False)
+    window: float = eqx.field(static=True, default=0.05)
 
     @property
     def rtol(self):
@@ -138,19 +240,47 @@ class FlightController(dfx.AbstractAdaptiveStepSizeController):
 
     def init(self, terms, t0, t1, y0, dt0, args, func, error_order):
         dt0 = dt0 if dt0 is None else jnp.minimum(dt0, self.max_step)
-        return self.pid.init(terms, t0, t1, y0, dt0, args, func, error_order)
+        first, state = self.pid.init(terms, t0, t1, y0, dt0, args, func, error_order)
+        if not self.onsets:
+            return first, state
+        onset = onset_at(args, y0)  # a touching stack's first contact starts at t0
+        first = jnp.where(onset, jnp.minimum(t0 + ONSET_FIRST_S**4, t1), first)
+        return first, (state, jnp.where(onset, t0, -jnp.inf))
 
     def adapt_step_size(self, t0, t1, y0, y1_candidate, args, y_error, error_order, controller_state):
-        keep, next_t0, next_t1, made_jump, state, result = self.pid.adapt_step_size(
-            t0, t1, y0, y1_candidate, args, y_error, error_order, controller_state)
-        # The bound of the state the next step starts from. After a rejection that is `y0` again, whose bound
-        # the rejected step kept, and the PID shrinks the step: nothing to do. So only `y1_candidate`'s is
-        # needed.
-        limit = flight_limit(args, y1_candidate, self.max_step, self.fraction)
-        # as `PIDController(dtmax=limit)` computes it where the bound applies (`next_t0 + dtmax`), and the
-        # PID's own `next_t1` untouched where it does not: bit for bit the old path wherever limit = max_step
-        clip = keep & (next_t1 - next_t0 > limit)
-        return keep, next_t0, jnp.where(clip, next_t0 + limit, next_t1), made_jump, state, result
+        if not self.onsets:
+            keep, next_t0, next_t1, made_jump, state, result = self.pid.adapt_step_size(
+                t0, t1, y0, y1_candidate, args, y_error, error_order, controller_state)
+            # The bound of the state the next step starts from. After a rejection that is `y0` again, whose
+            # bound the rejected step kept, and the PID shrinks the step: nothing to do. So only
+            # `y1_candidate`'s is needed.
+            limit = flight_limit(args, y1_candidate, self.max_step, self.fraction)
+            # as `PIDController(dtmax=limit)` computes it where the bound applies (`next_t0 + dtmax`), and
+            # the PID's own `next_t1` untouched where it does not: bit for bit the old path wherever
+            # limit = max_step
+            clip = keep & (next_t1 - next_t0 > limit)
+            return keep, next_t0, jnp.where(clip, next_t0 + limit, next_t1), made_jump, state, result
+        pid_state, t_star = controller_state
+        # in an onset window the step was taken in s (`UnrolledERK.step`): the PID chooses the next in s
+        win = _in_window(t0, t_star, self.window)
+        s01 = jnp.where(win, _s_ends(win, t0, t1, t_star), jnp.stack([t0, t1]))
+        keep, _, next_t1, _, pid_state, result = self.pid.adapt_step_size(
+            s01[0], s01[1], y0, y1_candidate, args, y_error, error_order, pid_state)
+        next_t0 = jnp.where(keep, t1, t0)
+        next_t1 = jnp.where(win, t_star + next_t1**4, next_t1)
+        limit, land, onset = flight_and_landing(args, y0, y1_candidate, t1 - t0, self.max_step, self.fraction,
+                                                self.flight)
+        next_t1 = jnp.where(keep & (next_t1 - next_t0 > limit), next_t0 + limit, next_t1)
+        # land the next onset: end the next step where an open interface closes (unless that step would be
+        # too short for the time's rounding)
+        resolvable = land > LANDING_MIN_ULPS * jnp.finfo(land.dtype).eps * jnp.maximum(jnp.abs(next_t0), 1.0)
+        next_t1 = jnp.where(keep & resolvable & (next_t1 - next_t0 > land), next_t0 + land, next_t1)
+        # a new window where the accepted step ends at an onset; `made_jump` tells the solver (diffrax passes
+        # it to the next step, and keeps the old one with a rejected step)
+        onset = keep & onset
+        t_star = jnp.where(onset, t1, t_star)
+        next_t1 = jnp.where(onset, t1 + ONSET_FIRST_S**4, next_t1)
+        return keep, next_t0, next_t1, onset, (pid_state, t_star), result
 
 
 #: largest state (entries) that `UnrolledERK` steps with its stages written out; above, diffrax's loop
@@ -167,7 +297,7 @@ class UnrolledERK(dfx.AbstractAdaptiveSolver):
     costs more than the vector field. Unrolled, XLA fuses each stage into the next: the same arithmetic
     (to rounding) in fewer, larger operations. The solver state is `f(t0, y0)` (first same as last); the
     stack is never solved with jumps (`made_jump` is always False: no `jump_ts`, no events that restart).
-    For one flat array state and an ODE term only. Subclasses set `tableau`, `interpolation_cls`,
+    For one flat array state and an ODE term only. Subclasses set `tableau`, `base_interpolation`,
     `method_order` and `stock`, diffrax's own solver of the same method.
 
     Written out pays only for small states: from ~30 masses on (a state of `UNROLL_MAX_STATE` = 128
@@ -180,10 +310,18 @@ class UnrolledERK(dfx.AbstractAdaptiveSolver):
 
     term_structure: ClassVar = dfx.AbstractTerm
     tableau: ClassVar[Any]
-    interpolation_cls: ClassVar[Any]
+    base_interpolation: ClassVar[Any]
     method_order: ClassVar[int]
     stock: ClassVar[Any]
     scan_kind: str | None = None  # a plain field, as diffrax's (`_Tracked.around` sets it with `eqx.tree_at`)
+    #: onset windows (`Tolerances.land_onsets`; set by the solve for states of at most `UNROLL_MAX_STATE`
+    #: entries, with `FlightController(onsets=True)`): the state is then `(f(t0, y0), t*)`
+    onsets: bool = eqx.field(static=True, default=False)
+    window: float = eqx.field(static=True, default=0.05)
+
+    @property
+    def interpolation_cls(self):
+        return _onset_interpolation(self.base_interpolation) if self.onsets else self.base_interpolation
 
     def _large(self, y0) -> bool:
         return y0.shape[0] > UNROLL_MAX_STATE
@@ -194,26 +332,92 @@ class UnrolledERK(dfx.AbstractAdaptiveSolver):
     def init(self, terms, t0, t1, y0, args):
         if self._large(y0):
             return self.stock(scan_kind=self.scan_kind).init(terms, t0, t1, y0, args)
-        return terms.vf(t0, y0, args)
+        f0 = terms.vf(t0, y0, args)
+        if not self.onsets:
+            return f0
+        # an onset at the start (a touching stack's first contact), as `FlightController.init` finds it
+        return f0, jnp.where(onset_at(args, y0), t0, -jnp.inf).astype(y0.dtype)
 
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
+        """One step `t0 -> t1`. With `onsets`, a step that starts where a contact starts (`onset_at`) opens
+        a window of `window` contact times from `t* = t0`, and a step that starts in it is the same
+        Runge–Kutta step in `s = (t - t*)^{1/4}`, `dy/ds = f(t* + s^4, y) 4 s^3` (stage `i` at
+        `s0 + c_i (s1 - s0)`), where the motion after a contact's start is a power series; elsewhere the
+        step is the plain one, operation for operation."""
         if self._large(y0):
             return self.stock(scan_kind=self.scan_kind).step(terms, t0, t1, y0, args, solver_state, made_jump)
-        del made_jump
         tab = self.tableau
         dt = terms.contr(t0, t1)
-        ks = [solver_state * dt]
+        if self.onsets:
+            f0, t_star = solver_state
+            t_star = jnp.where(made_jump, t0, t_star)  # the controller found an onset at t0
+            win = _in_window(t0, t_star, self.window)
+            s01 = _s_ends(win, t0, t1, t_star)
+            ds = s01[1] - s01[0]
+            # every stage's time and weight in one operation each (XLA on a CPU runs every operation that it
+            # cannot fuse as a kernel of its own, ~80 ns: few, wider operations)
+            cs = np.array([0.0] + [float(c) for c in tab.c])
+            sc = s01[0] + cs * ds
+            times = jnp.where(win, t_star + sc**4, t0 + cs * dt).at[0].set(t0).at[-1].set(t1)
+            weights = jnp.where(win, 4.0 * sc**3 * ds, dt)
+            index = {c: i for i, c in enumerate(cs)}
+
+            def at(c):  # (time, weight) of a stage at the fraction c of the step
+                return times[index[c]], weights[index[c]]
+        else:
+            f0 = solver_state
+
+            def at(c):
+                return t0 + c * dt, dt
+        ks = [f0 * at(0.0)[1]]
         for a_row, c in zip(tab.a_lower, tab.c):
             yi = y0 + sum(float(a) * k for a, k in zip(a_row, ks) if a != 0)
-            ks.append(terms.vf(t0 + float(c) * dt, yi, args) * dt)
+            ti, wi = at(float(c))
+            ks.append(terms.vf(ti, yi, args) * wi)
         y1 = yi  # the last stage is evaluated at y1 (b_sol equals the last row: "ssal")
         y_error = sum(float(b) * k for b, k in zip(tab.b_error, ks) if b != 0)
-        f1 = ks[-1] / dt
-        dense_info = dict(y0=y0, y1=y1, k=jnp.stack(ks))
-        return y1, y_error, dense_info, f1, dfx.RESULTS.successful
+        f1 = ks[-1] / wi
+        if not self.onsets:
+            return y1, y_error, dict(y0=y0, y1=y1, k=jnp.stack(ks)), f1, dfx.RESULTS.successful
+        dense_info = dict(y0=y0, y1=y1, k=jnp.stack(ks), t_star=t_star, window=win)
+        return y1, y_error, dense_info, (f1, t_star), dfx.RESULTS.successful
 
     def func(self, terms, t0, y0, args):
         return terms.vf(t0, y0, args)
+
+
+@functools.cache
+def _onset_interpolation(base):
+    """The dense output of `UnrolledERK(onsets=True)`: `base` (the method's own interpolation) in the
+    step's variable, `s = (t - t*)^{1/4}` in an onset window, `t` elsewhere."""
+
+    class OnsetInterpolation(dfx.AbstractLocalInterpolation):
+        t0: Any
+        t1: Any
+        y0: Any
+        y1: Any
+        k: Any
+        t_star: Any
+        window: Any
+
+        def _base(self):
+            return base(t0=self.t0, t1=self.t1, y0=self.y0, y1=self.y1, k=self.k)
+
+        def _mapped(self, t):
+            # the time at which the plain step's interpolation reads the fraction (s - s0) / (s1 - s0)
+            s0 = _root4(jnp.where(self.window, self.t0 - self.t_star, 1.0))
+            s1 = _root4(jnp.where(self.window, self.t1 - self.t_star, 2.0))
+            s = _root4(jnp.where(self.window, jnp.maximum(t - self.t_star, 0.0), 1.0))
+            return jnp.where(self.window, self.t0 + (s - s0) / (s1 - s0) * (self.t1 - self.t0), t)
+
+        def evaluate(self, t0, t1=None, left=True):
+            b = self._base()
+            if t1 is None:
+                return b.evaluate(self._mapped(t0), None, left)
+            return b.evaluate(self._mapped(t1), None, left) - b.evaluate(self._mapped(t0), None, left)
+
+    OnsetInterpolation.__name__ = OnsetInterpolation.__qualname__ = f"Onset{base.__name__}"
+    return OnsetInterpolation
 
 
 class UnrolledTsit5(UnrolledERK):
@@ -221,7 +425,7 @@ class UnrolledTsit5(UnrolledERK):
     default solver."""
 
     tableau: ClassVar = dfx.Tsit5.tableau
-    interpolation_cls: ClassVar = dfx.Tsit5.interpolation_cls
+    base_interpolation: ClassVar = dfx.Tsit5.interpolation_cls
     stock: ClassVar = dfx.Tsit5
     method_order: ClassVar[int] = 5
 
@@ -231,7 +435,7 @@ class UnrolledDopri8(UnrolledERK):
     Bogacki & Shampine 1990), unrolled (`UnrolledERK`): 14 stages a step."""
 
     tableau: ClassVar = dfx.Dopri8.tableau
-    interpolation_cls: ClassVar = dfx.Dopri8.interpolation_cls
+    base_interpolation: ClassVar = dfx.Dopri8.interpolation_cls
     stock: ClassVar = dfx.Dopri8
     method_order: ClassVar[int] = 8
 
@@ -241,7 +445,7 @@ class UnrolledDopri5(UnrolledERK):
     (`UnrolledERK`)."""
 
     tableau: ClassVar = dfx.Dopri5.tableau
-    interpolation_cls: ClassVar = dfx.Dopri5.interpolation_cls
+    base_interpolation: ClassVar = dfx.Dopri5.interpolation_cls
     stock: ClassVar = dfx.Dopri5
     method_order: ClassVar[int] = 5
 

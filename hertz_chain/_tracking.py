@@ -379,8 +379,10 @@ class _Tracked(dfx.AbstractWrappedSolver):
         inner, contacts = solver_state
         y1, y_error, dense_info, inner, result = self.solver.step(terms, t0, t1, y0, args, inner, made_jump)
         # the derivative at the step's end: the first-same-as-last stage of the default solver
-        # (`UnrolledTsit5`'s state is f(t1, y1)), else one more evaluation
-        dys = inner if isinstance(inner, jax.Array) and inner.shape == y1.shape else terms.vf(t1, y1, args)
+        # (`UnrolledTsit5`'s state is f(t1, y1), or `(f(t1, y1), t*)` with onset windows), else one more
+        # evaluation
+        f1 = inner[0] if isinstance(inner, tuple) and len(inner) == 2 else inner
+        dys = f1 if isinstance(f1, jax.Array) and f1.shape == y1.shape else terms.vf(t1, y1, args)
         contacts = _Contacts.update(contacts, t1, y1, args, self.audit, self.launch, dys, self.durations)
         # the cascade-over flag, read by the stopping event (`_scaled_field`); its derivative is zero, so
         # its error estimate is zero already

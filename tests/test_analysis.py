@@ -102,11 +102,15 @@ def test_single_hertz_bounce_pulse():
     # peak read at the solver's steps: within (step/t_c)^2 of F_max/m
     assert r.top_pulse.peak == pytest.approx(f_max / m, rel=1e-4)
     # the elastic pulse is symmetric: its peak at t_c / 2 (parabola through the samples: O(step^2));
-    # the mass reaches its peak velocity v as the contact ends, at t_c (Hermite with the accelerations)
+    # the mass reaches its peak velocity v as the contact ends, at t_c (Hermite with the accelerations);
+    # the velocity is flat there, v - c (t_c - t)^{5/2}, so a velocity error of rtol moves its maximum by
+    # ~rtol^{2/5} t_c = 1e-4 t_c at 1e-10: bounded at three times that;
+    # the velocity is flat there, v - c (t_c - t)^{5/2}, so a velocity error of rtol moves its maximum by
+    # ~rtol^{2/5} t_c = 1e-4 t_c at 1e-10: bounded at three times that
     t_c = 2.94328 * d_max / v
     assert ep.peak_force_time == pytest.approx(0.5 * t_c, rel=1e-4)
     assert r.peak_velocities[0] == pytest.approx(v, rel=1e-8)
-    assert r.peak_velocity_times[0] == pytest.approx(t_c, rel=1e-4)
+    assert r.peak_velocity_times[0] == pytest.approx(t_c, rel=3e-4)
     from hertz_chain.report import to_dict
 
     d = to_dict(r)
