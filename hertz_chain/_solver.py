@@ -262,12 +262,14 @@ class FlightController(dfx.AbstractAdaptiveStepSizeController):
             return keep, next_t0, jnp.where(clip, next_t0 + limit, next_t1), made_jump, state, result
         pid_state, t_star = controller_state
         # in an onset window the step was taken in s (`UnrolledERK.step`): the PID chooses the next in s
+        keep, next_t0, next_t1, _, pid_state, result = self.pid.adapt_step_size(
+            t0, t1, y0, y1_candidate, args, y_error, error_order, pid_state)
+        # the PID's factor on the step, applied in s = (t - t*)^{1/4} (as if it had been given s0, s1)
         win = _in_window(t0, t_star, self.window)
-        s01 = jnp.where(win, _s_ends(win, t0, t1, t_star), jnp.stack([t0, t1]))
-        keep, _, next_t1, _, pid_state, result = self.pid.adapt_step_size(
-            s01[0], s01[1], y0, y1_candidate, args, y_error, error_order, pid_state)
-        next_t0 = jnp.where(keep, t1, t0)
-        next_t1 = jnp.where(win, t_star + next_t1**4, next_t1)
+        s01 = _s_ends(win, t0, t1, t_star)
+        factor = (next_t1 - next_t0) / (t1 - t0)
+        s_next = jnp.where(keep, s01[1], s01[0]) + factor * (s01[1] - s01[0])
+        next_t1 = jnp.where(win, t_star + s_next**4, next_t1)
         limit, land, onset = flight_and_landing(args, y0, y1_candidate, t1 - t0, self.max_step, self.fraction,
                                                 self.flight)
         next_t1 = jnp.where(keep & (next_t1 - next_t0 > limit), next_t0 + limit, next_t1)

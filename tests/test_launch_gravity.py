@@ -341,6 +341,57 @@ def test_free_flight_steps_end_before_any_contact_and_cost_few_steps():
     assert sol.launch_velocities[-1] == pytest.approx(_ref_drop(3, "tsuji", 5e-2).launch[-1], rel=1e-6)
 
 
+def _onset_steps(sol):
+    """Per contact onset of a solve's step history (an interface open at one accepted point, closed at
+    the next): the overlap at the open point (units of L) and the steps within 0.05 T after it."""
+    t, d = np.asarray(sol.steps.t), np.asarray(sol.steps.overlaps)
+    T, L = float(sol.scales.time), float(sol.scales.length)
+    k, j = np.nonzero((d[:-1] < 0) & (d[1:] >= 0))
+    return [(d[kk, jj] / L, int(np.sum((t > t[kk]) & (t <= t[kk] + 0.05 * T)))) for kk, jj in zip(k, j)]
+
+
+def test_onsets_are_landed_and_stepped_through_in_s():
+    # `Tolerances.land_onsets` (docs/solver-defaults.md, "Onsets met"): every contact onset of the 3-mass
+    # Tsuji drop with 5 cm gaps (three, each after a free flight) is met by a step end within
+    # ONSET_OVERLAP = 1e-9 L of the touch (measured ~6e-14 L: the parabola of free flight is exact); the
+    # window after it, stepped in s = (t - t*)^{1/4}, takes fewer than half the steps of the plain solve
+    # over its first 0.05 T (measured 21-31 against 43-70), and the launch is the scipy reference's
+    # (DOP853 at rtol 1e-12, `cascade_reference`) to 1e-8 both ways (measured 5.6e-11 and 5.3e-11).
+    from hertz_chain._solver import ONSET_OVERLAP
+
+    ref = _ref_drop(3, "tsuji", 5e-2).launch[-1]
+    stack = _stack(_masses(3), "tsuji")
+    state = hc.at_impact(stack, 1.0, 5e-2)
+    on = hc.simulate(stack, state, tolerances=TIGHT)
+    off = hc.simulate(stack, state, tolerances=hc.Tolerances(rtol=1e-11, atol=1e-11, land_onsets=False))
+    landed, plain = _onset_steps(on), _onset_steps(off)
+    assert len(landed) == len(plain) == 3
+    assert all(abs(d) <= ONSET_OVERLAP for d, _ in landed)
+    assert all(abs(d) > 10 * ONSET_OVERLAP for d, _ in plain)  # the plain solve: 1e-7..2e-6 L before
+    assert all(2 * a < b for (_, a), (_, b) in zip(landed, plain))
+    assert on.num_steps < off.num_steps
+    assert on.launch_velocities[-1] == pytest.approx(ref, rel=1e-8)
+    assert off.launch_velocities[-1] == pytest.approx(ref, rel=1e-8)
+
+
+def test_dense_output_in_an_onset_window_is_the_motion():
+    # A sphere dropped at 1 m/s onto a Hertz ground (g = 0) touches at t = 0: its first 0.05 T are an onset
+    # window, stepped in s. The saved grid there (the solver's dense output, mapped to s) is the overlap of
+    # an independent scipy DOP853 solve (rtol 1e-13) of m x'' = -k x^{3/2} to 1e-9 L.
+    from scipy.integrate import solve_ivp
+
+    m, k, v = 0.1, 1e9, 1.0
+    stack = hc.Stack([m], [hc.Hertz(k)], gravity=0.0)
+    T = float(hc.simulate(stack, hc.at_impact(stack, v), t_max=1e-6).scales.time)
+    L = float(hc.simulate(stack, hc.at_impact(stack, v), t_max=1e-6).scales.length)
+    ts = np.linspace(0.0, 0.05 * T, 41)[1:]
+    sol = hc.simulate(stack, hc.at_impact(stack, v), ts=ts, until="t_max", t_max=0.06 * T)
+    ref = solve_ivp(lambda t, y: [y[1], -k / m * max(y[0], 0.0) ** 1.5], (0.0, ts[-1]), [0.0, v], t_eval=ts,
+                    method="DOP853", rtol=1e-13, atol=1e-20 * L)
+    got = -np.asarray(sol.grid.positions)[:, 0]
+    assert np.max(np.abs(got - ref.y[0])) < 1e-9 * L
+
+
 def test_closure_times_are_the_first_positive_root():
     # Reference: numpy.roots of delta + r t + a t^2 / 2 (companion-matrix eigenvalues), the smallest
     # positive real root, inf if none; random gaps, rates and accelerations of both signs, a = 0 too.

@@ -225,6 +225,12 @@ def test_bad_options_raise_parameter_error():
     for bad in (0.0, 1.0, "0.5"):
         with pytest.raises(ParameterError, match="flight_fraction.*0 < flight_fraction < 1"):
             Tolerances(flight_fraction=bad)
+    for bad in (0.0, -0.1, float("inf"), "0.05", True):
+        with pytest.raises(ParameterError, match="onset_window.*finite number > 0"):
+            Tolerances(onset_window=bad)
+    for bad in (1, "yes", None):
+        with pytest.raises(ParameterError, match="land_onsets.*True or False"):
+            Tolerances(land_onsets=bad)
     with pytest.raises(ParameterError):
         simulate_impact(Hertz(1e9), -1.0, 1.0)
 
