@@ -212,9 +212,10 @@ class FlightController(dfx.AbstractAdaptiveStepSizeController):
 
     With `onsets` (`Tolerances.land_onsets`) it also lands every contact onset it can predict
     (`flight_and_landing`: the next step ends there if it would pass it), and inside an onset window (a step
-    that starts at `onset_at`, for `window` contact times) it runs the PID on `s = (t - t*)^{1/4}`, the
-    variable the solver steps in there (`UnrolledERK` with `onsets`): the first step of a window is
-    `ONSET_FIRST_S` in `s`. Its state is then `(PID state, t*)` (`t* = -inf` before the first onset)."""
+    that starts at `onset_at`, for `window` contact times) it applies the PID's factor to the step in
+    `s = (t - t*)^{1/4}`, the variable the solver steps in there (`UnrolledERK` with `onsets`): the first
+    step of a window is `ONSET_FIRST_S` in `s`. It tells the solver of an onset at the next step's start
+    through `made_jump`. Its state is then `(PID state, t*)` (`t* = -inf` before the first onset)."""
 
     pid: dfx.PIDController
     max_step: float = eqx.field(static=True)
@@ -298,7 +299,8 @@ class UnrolledERK(dfx.AbstractAdaptiveSolver):
     tableaus, one compiled stage); for the few dozen numbers of a stack's state the loop's bookkeeping
     costs more than the vector field. Unrolled, XLA fuses each stage into the next: the same arithmetic
     (to rounding) in fewer, larger operations. The solver state is `f(t0, y0)` (first same as last); the
-    stack is never solved with jumps (`made_jump` is always False: no `jump_ts`, no events that restart).
+    stack is never solved with jumps (no `jump_ts`, no events that restart): `made_jump` is read only with
+    `onsets`, where `FlightController` sets it at a contact onset.
     For one flat array state and an ODE term only. Subclasses set `tableau`, `base_interpolation`,
     `method_order` and `stock`, diffrax's own solver of the same method.
 
