@@ -17,9 +17,11 @@ It uses the disk only where the result is certain to be the same:
   Python's containers, and static values of plain types (numbers, strings, bools, None, enums, NumPy
   scalars and dtypes, tuples of these): a user's own class (a contact law, a solver) can change its code
   between runs under the same name, and other values may print differently in the next process;
-- only under `EQX_ON_ERROR=nan` as equinox read it at import (the command line's setting): equinox's
-  run-time checks are host callbacks otherwise, and a module with a host callback cannot be serialised.
-  The Python API therefore keeps `jitted`'s path unless the user sets it before importing;
+- only under equinox's `EQX_ON_ERROR=raise` (the default) or `nan` (the command line's setting), as equinox
+  read it at import, which is part of the key. Under `raise` equinox's run-time checks are host callbacks,
+  and a module with a host callback cannot be serialised: such a function is marked unexportable (below)
+  and keeps `jitted`'s path. The solve (`_solve._solve_plain`) has none: it reports its outcome as a status,
+  and passes diffrax no `dt0` to check (`FlightController.init`);
 - never for traced or weakly typed arguments (a call under an outer `jit`, `vmap` or `grad`; Python
   scalars turned into arrays), whose promotion rules an exported module does not keep;
 - `fn` must return only dicts, lists, tuples, None and arrays (the pytree nodes `jax.export` serialises).
@@ -95,7 +97,7 @@ def _eqx_on_error() -> str | None:
 
 def _folder() -> Path | None:
     root = _config.CACHE_DIR
-    if root is None or _eqx_on_error() != "nan":
+    if root is None or _eqx_on_error() not in ("nan", "raise"):
         return None
     return Path(root) / "export"
 
@@ -128,7 +130,7 @@ def _key(name: str, leaves: list, dyn_tree, static: Any) -> str | None:
     if " at 0x" in static_text:  # printed with an address: not the same text in the next process
         return None
     arrays = [(tuple(np.shape(x)), str(x.dtype)) for x in leaves]
-    text = f"{name}|{_settings()}|{dyn_tree}|{static_text}|{arrays}"
+    text = f"{name}|{_settings()}|eqx_on_error={_eqx_on_error()}|{dyn_tree}|{static_text}|{arrays}"
     return f"{fingerprint}-{hashlib.sha256(text.encode()).hexdigest()[:32]}"
 
 

@@ -126,7 +126,7 @@ def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _SolveConfig, hist
         _Tracked.around(solver, cfg.adjoint, audit=audit, launch=cfg.until == "launch", durations=cfg.durations),
         t0=0.0,
         t1=t1s,
-        dt0=cfg.tolerances.first_step,
+        dt0=None,  # the controller's `first_step` (`FlightController.init`)
         y0=y0s,
         args=FieldArgs(stack, scale, T, y0s[stack.n : 2 * stack.n],
                        scale[0] / (stack.effective_masses() * scale[stack.n] ** 2)),
@@ -246,7 +246,7 @@ def _solve_plain(stack: Stack, state: State, ts, t_max, cfg: _SolveConfig) -> di
     return out
 
 
-# a traced solve is kept on disk where that is exact (`_export`: under EQX_ON_ERROR=nan, the CLI's setting)
+# a traced solve is kept on disk where that is exact (`_export`)
 _solve = cached_jit(_solve_plain, eqx.filter_jit(_solve_plain), "simulate._solve")
 
 

@@ -91,16 +91,12 @@ class Tolerances(eqx.Module):
             raise ParameterError("onset_window", w, "a finite number > 0 (contact times)")
 
     def controller(self, onsets: bool = False) -> dfx.AbstractAdaptiveStepSizeController:
-        """The step-size controller: diffrax's `PIDController`, with `max_step` as its largest step, or
-        (`flight_steps`, or `onsets`: the solve lands its onsets, `land_onsets` where the solver can)
-        `FlightController` around it."""
-        if not self.flight_steps and not onsets:
-            return dfx.PIDController(
-                rtol=self.rtol, atol=self.atol, pcoeff=self.pcoeff, icoeff=self.icoeff, dtmax=self.max_step
-            )
+        """The step-size controller: `FlightController` around diffrax's `PIDController`, with `max_step` as
+        its largest step (longer in free flight with `flight_steps`), landing onsets with `onsets` (the
+        solve lands its onsets: `land_onsets` where the solver can), and `first_step` as its first step."""
         pid = dfx.PIDController(rtol=self.rtol, atol=self.atol, pcoeff=self.pcoeff, icoeff=self.icoeff)
         return FlightController(pid, self.max_step, self.flight_fraction, self.flight_steps, onsets,
-                                self.onset_window)
+                                self.onset_window, self.first_step)
 
 
 def _closure_times(delta, rate, acc):
@@ -223,6 +219,7 @@ class FlightController(dfx.AbstractAdaptiveStepSizeController):
     flight: bool = eqx.field(static=True, default=True)
     onsets: bool = eqx.field(static=True, default=False)
     window: float = eqx.field(static=True, default=0.05)
+    first_step: float | None = eqx.field(static=True, default=None)
 
     @property
     def rtol(self):
@@ -240,6 +237,10 @@ class FlightController(dfx.AbstractAdaptiveStepSizeController):
         return self
 
     def init(self, terms, t0, t1, y0, dt0, args, func, error_order):
+        # the first step is the controller's own (`first_step`): `diffeqsolve(dt0=None)` compiles no
+        # run-time check of dt0's sign, whose host callback would keep the solve out of JAX's persistent
+        # compilation cache
+        dt0 = self.first_step if dt0 is None else dt0
         dt0 = dt0 if dt0 is None else jnp.minimum(dt0, self.max_step)
         first, state = self.pid.init(terms, t0, t1, y0, dt0, args, func, error_order)
         if not self.onsets:
@@ -255,7 +256,8 @@ class FlightController(dfx.AbstractAdaptiveStepSizeController):
             # The bound of the state the next step starts from. After a rejection that is `y0` again, whose
             # bound the rejected step kept, and the PID shrinks the step: nothing to do. So only
             # `y1_candidate`'s is needed.
-            limit = flight_limit(args, y1_candidate, self.max_step, self.fraction)
+            limit = (flight_limit(args, y1_candidate, self.max_step, self.fraction) if self.flight
+                     else self.max_step)
             # as `PIDController(dtmax=limit)` computes it where the bound applies (`next_t0 + dtmax`), and
             # the PID's own `next_t1` untouched where it does not: bit for bit the old path wherever
             # limit = max_step

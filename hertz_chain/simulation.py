@@ -91,6 +91,7 @@ from jaxtyping import Array, ArrayLike
 
 from . import _config  # noqa: F401  (float64)
 from ._adjoint import _replayed_solve
+from ._export import cached_jit
 from ._results import BatchSolution, Solution, Trajectory, _to_solution
 from ._scaling import Scales, _scales  # noqa: F401  (`_scales`: the benchmarks use it)
 from ._solve import (  # noqa: F401  (`_scaled_field`: the benchmarks' scipy comparison uses it)
@@ -211,8 +212,8 @@ def simulate(
       `throw=False`, read `Solution.status` (incomplete at `t_max`, no contact).
 
     **Returns** a `Solution`. Compiled once per structure (n, law types, ground, solver, options); the
-    compiled solve is kept in JAX's compilation cache and, under `EQX_ON_ERROR=nan` (the command line's
-    setting), the traced one too (`hertz_chain._export`), so a new process skips both.
+    compiled solve is kept in JAX's compilation cache and the traced one too (`hertz_chain._export`, under
+    equinox's `EQX_ON_ERROR=raise` or `nan`), so a new process skips both.
     """
     ts, t_max, cfg = _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, until=until)
     if state.positions.shape != stack.masses.shape:
@@ -338,21 +339,29 @@ def simulate_batch(
 
 
 def _launch_impl(stack, state, t_max, cfg, replay: bool):
+    """The launch velocities and the status of one solve (`launch_velocity`, unchecked: `_checked`)."""
     if replay:
         sc, scale, y0s, t1s = _setup(stack, state, t_max, cfg)
         frozen = jax.lax.stop_gradient((t1s, scale, sc.time))  # the end time and the scales carry no gradient
         out = _launch_outputs(stack, sc, scale, _replayed_solve((stack, y0s), *frozen, cfg))
     else:
         out = _solve_impl(stack, state, None, t_max, cfg, launch_only=True)
-    v = eqx.error_if(
-        out["launch_velocities"], out["status"] > Status.COMPLETE_WITH_REBOUNDS,
+    return out["launch_velocities"], out["status"]
+
+
+def _checked(v, status):
+    """`v`, or a run-time error where the solve did not end (`eqx.error_if`). Kept out of `_launch_jit`:
+    its host callback would keep the compiled solve out of JAX's persistent compilation cache."""
+    return eqx.error_if(
+        v, status > Status.COMPLETE_WITH_REBOUNDS,
         "hertz_chain.launch_velocity: the cascade did not end (t_max or max_steps reached, no contact, "
         "or a non-finite state); raise t_max or max_steps, or check the design",
     )
-    return v
 
 
-_launch_jit = eqx.filter_jit(_launch_impl)  # `replay` is a Python bool: static
+# `replay` is a Python bool: static. Called on arrays (not under the user's `jit`/`grad`), the traced solve is
+# kept on disk as `simulate`'s is (`_export`; a differentiated call traces, and keeps the replayed adjoint)
+_launch_jit = cached_jit(_launch_impl, eqx.filter_jit(_launch_impl), "launch_velocity")
 
 
 def launch_velocity(
@@ -395,7 +404,7 @@ def launch_velocity(
     """
     replay = isinstance(adjoint, str) and adjoint == "reverse"
     t_max, cfg = _launch_config(stack, state, solver, tolerances, t_max, max_steps, adjoint, until)
-    return _launch_jit(stack, state, t_max, cfg, replay)
+    return _checked(*_launch_jit(stack, state, t_max, cfg, replay))
 
 
 def _launch_config(stack, state, solver, tolerances, t_max, max_steps, adjoint, until):
@@ -445,7 +454,7 @@ def prepare_launch(
         it = iter(lv)
         full = [next(it) if a else x for x, a in zip(all_leaves, is_array)]
         s, st = jax.tree_util.tree_unflatten(tree, full)
-        return _launch_impl(s, st, t_max_, cfg, False)
+        return _checked(*_launch_impl(s, st, t_max_, cfg, False))
 
     compiled = jax.jit(run)
     prepared_for = _describe(stack)

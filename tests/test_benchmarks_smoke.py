@@ -82,7 +82,7 @@ def test_batch_grad_and_targets_structure(quick_run):
         assert math.isfinite(row[key]) and row[key] > 0
     assert row["simulate_batch_lean_ms"] == "nan"  # quick: not run (one compile fewer)
     (g,) = data["grads"]
-    assert g["n"] == 2 and math.isfinite(g["grad_ratio"]) and g["grad_ratio"] > 0
+    assert g["n"] == 2 and g["regime"] == "gapped-hertz" and math.isfinite(g["grad_ratio"]) and g["grad_ratio"] > 0
     # quick: the central differences of a 1e-13 reference are not compiled (tests/test_gradients.py
     # checks the gradient against finite differences; `make bench` reports it)
     assert g["rev_vs_fd_rel"] == "nan"

@@ -87,27 +87,39 @@ def test_a_damaged_entry_is_replaced_not_trusted(runs):
     assert path.read_bytes() != b"\x00 not a serialized module"  # exported afresh
 
 
-def test_python_api_default_keeps_the_jit_path(tmp_path):
-    """Without EQX_ON_ERROR=nan equinox's checks are host callbacks: no export is attempted at all."""
-    out = _run(3, tmp_path, EQX_ON_ERROR=None)
-    assert not out["cached"]
-    assert not (tmp_path / "jax" / "export").exists()
+def test_python_api_default_exports_too_and_keys_equinox_s_setting(runs, tmp_path):
+    """Under equinox's default (`EQX_ON_ERROR=raise`, the Python API's) the solve holds no host callback
+    (no `dt0` for diffrax to check at run time), so it is exported as well: under its own key (the
+    setting is part of it) and bit for bit the plain path's result, in a first and a second process."""
+    first = _run(3, tmp_path, EQX_ON_ERROR=None)
+    second = _run(3, tmp_path, EQX_ON_ERROR=None)
+    assert first["cached"] and second["cached"]
+    assert first["cached"] != runs["first"]["cached"]  # another key than under `nan`
+    folder = tmp_path / "jax" / "export"
+    assert len(list(folder.glob("*.jaxexport"))) == 1 and not list(folder.glob("*.unexportable"))
+    assert _same(first, runs["plain"]) and _same(second, runs["plain"])
 
 
 def test_unexportable_function_is_marked_and_falls_back(tmp_path, monkeypatch):
-    """In this process equinox raises (host callbacks), so exporting fails: the call must still return
-    the jitted result, and a marker must stop later processes from trying again."""
+    """In this process equinox raises, so its run-time check is a host callback and a function with one
+    cannot be exported: the call must still return the jitted result (and raise where it should), and a
+    marker must stop later processes from trying again."""
+    import equinox as eqx
+    import jax.numpy as jnp
+
     monkeypatch.setattr(_config, "CACHE_DIR", str(tmp_path))
     monkeypatch.setattr(_export, "_eqx_on_error", lambda: "nan")  # a lie: equinox was imported with raise
     monkeypatch.setattr(_export, "_MEMO", {})
-    stack = hc.Stack(0.5 ** np.arange(3), hc.Hertz(1e9), gravity=0.0)
-    state = hc.at_impact(stack, 1.0, gaps=1e-3)
-    sol = hc.simulate(stack, state)
+
+    def checked(x):
+        return eqx.error_if(2.0 * x, x < 0, "negative input")
+
+    f = _export.cached_jit(checked, eqx.filter_jit(checked), "test.checked")
+    np.testing.assert_array_equal(np.asarray(f(jnp.arange(3.0))), [0.0, 2.0, 4.0])
     markers = list((tmp_path / "export").glob("*.unexportable"))
     assert len(markers) == 1 and not list((tmp_path / "export").glob("*.jaxexport"))
-    monkeypatch.setattr(_config, "CACHE_DIR", None)
-    ref = hc.simulate(stack, state)
-    np.testing.assert_array_equal(np.asarray(sol.launch_velocities), np.asarray(ref.launch_velocities))
+    with pytest.raises(Exception, match="negative input"):
+        f(-jnp.ones(3))
 
 
 def _parts(*args):

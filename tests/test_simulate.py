@@ -288,3 +288,20 @@ def test_prepared_launch_equals_launch_velocity_and_paper_eq_19():
     # gravity is a number of the design, not of the structure: the same compiled solve takes it
     np.testing.assert_array_equal(np.asarray(launch(*design([1.0, 0.3], g=9.81))),
                                   np.asarray(hc.launch_velocity(*design([1.0, 0.3], g=9.81), tolerances=tol)))
+
+
+def test_launch_velocity_raises_where_the_cascade_does_not_end():
+    """Solver trouble is reported, never a silent number: a 1 cm gap closed at 1 m/s takes 10 ms, so a
+    `t_max` of 1 us ends the solve before any contact, and `launch_velocity` and a prepared launch raise
+    (the status check runs after the compiled solve, `simulation._checked`), while the same call with the
+    default `t_max` returns paper Eq 19 (n = 2, e = 1) to 1e-8."""
+    law, tol = Hertz(1e9), Tolerances(rtol=1e-11, atol=1e-11)
+    stack = Stack(jnp.asarray([1.0, 0.3]), law, gravity=0.0)
+    state = at_impact(stack, 1.0, 0.01)
+    with pytest.raises(Exception, match="the cascade did not end"):
+        hc.launch_velocity(stack, state, tolerances=tol, t_max=1e-6)
+    launch = hc.prepare_launch(stack, state, tolerances=tol, t_max=1e-6)
+    with pytest.raises(Exception, match="the cascade did not end"):
+        launch(stack, state)
+    v = np.asarray(hc.launch_velocity(stack, state, tolerances=tol))
+    assert v[-1] == pytest.approx(2 * (2 / (1 + 0.3)) - 1, rel=1e-8)
