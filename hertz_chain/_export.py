@@ -6,7 +6,7 @@ before it: a warm `hertz-chain simulate` of the demo still spent 0.5 s tracing d
 with a versioned calling convention: JAX's supported format for keeping a traced function); a later
 process reads it back in about 2 ms, and compiling it hits the compilation cache.
 
-`cached_jit(fn, jitted, name)` returns a function that behaves as `jitted` (an `eqx.filter_jit` of `fn`).
+`cached_jit(fn, name, compiler_options)` returns a function that behaves as `eqx.filter_jit(fn)`.
 It uses the disk only where the result is certain to be the same:
 
 - the key covers `name`, the structure of the arguments with their static values (as text), every array's
@@ -163,7 +163,8 @@ def _write(path: Path, blob: bytes) -> None:
         raise
 
 
-def _load_or_export(path: Path, name: str, fn: Callable, leaves: list, dyn_tree, static: Any) -> Callable | None:
+def _load_or_export(path: Path, name: str, fn: Callable, leaves: list, dyn_tree, static: Any,
+                    compiler_options: dict | None = None) -> Callable | None:
     from jax import export
 
     try:
@@ -200,34 +201,37 @@ def _load_or_export(path: Path, name: str, fn: Callable, leaves: list, dyn_tree,
         return exported.call(*xs)
 
     run.__name__ = run.__qualname__ = f"{name.replace('.', '_')}_exported"  # names its compilation-cache entry
-    return jax.jit(run)
+    return jax.jit(run, compiler_options=compiler_options)
 
 
-def cached_jit(fn: Callable, jitted: Callable, name: str) -> Callable:
-    """`jitted` (an `eqx.filter_jit(fn)`), with the traced function kept on disk where that is exact
-    (module docstring)."""
+def cached_jit(fn: Callable, name: str, compiler_options: dict | None = None) -> Callable:
+    """`eqx.filter_jit(fn)`, with the traced function kept on disk where that is exact (module docstring).
+    A call at the top level (no argument traced) is compiled with XLA's `compiler_options`, the exported
+    module too; a call under the caller's own `jit`, `grad` or `vmap` is part of the caller's computation
+    (JAX takes compile options only at the top level), compiled as the caller's is."""
+    jitted = eqx.filter_jit(fn)
+    top = eqx.filter_jit(fn, compiler_options=compiler_options) if compiler_options else jitted
 
     @functools.wraps(fn)
     def call(*args):
-        folder = _folder()
-        if folder is None:
-            return jitted(*args)
         dyn, static = eqx.partition(args, eqx.is_array)
         leaves, dyn_tree = jax.tree_util.tree_flatten(dyn)
         if any(isinstance(x, jax.core.Tracer) for x in leaves):
             return jitted(*args)
-        key = _key(name, leaves, dyn_tree, static)
+        folder = _folder()
+        key = None if folder is None else _key(name, leaves, dyn_tree, static)
         if key is None:
-            return jitted(*args)
+            return top(*args)
         if key not in _MEMO:
-            _MEMO[key] = _load_or_export(folder / f"{key}.jaxexport", name, fn, leaves, dyn_tree, static)
+            _MEMO[key] = _load_or_export(folder / f"{key}.jaxexport", name, fn, leaves, dyn_tree, static,
+                                         compiler_options)
         run = _MEMO[key]
         if run is None:
-            return jitted(*args)
+            return top(*args)
         try:
             return run(*leaves)
         except Exception:  # a file that loads but does not fit, a changed setting, ...: never the user's problem
             _MEMO[key] = None
-            return jitted(*args)
+            return top(*args)
 
     return call

@@ -13,7 +13,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import _config  # noqa: F401  (float64)
+from . import _config  # float64; SOLVE_COMPILER_OPTIONS
 from ._export import cached_jit
 from ._law_base import _positive_part
 from ._scaling import FieldArgs, Scales, _default_t_max, _scales
@@ -247,7 +247,7 @@ def _solve_plain(stack: Stack, state: State, ts, t_max, cfg: _SolveConfig) -> di
 
 
 # a traced solve is kept on disk where that is exact (`_export`)
-_solve = cached_jit(_solve_plain, eqx.filter_jit(_solve_plain), "simulate._solve")
+_solve = cached_jit(_solve_plain, "simulate._solve", _config.SOLVE_COMPILER_OPTIONS)
 
 
 def _history_impl(stack: Stack, history, sc: Scales, rows: int):

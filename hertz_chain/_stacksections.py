@@ -620,7 +620,12 @@ def _parse_solver(raw: Any) -> SolverSpec:
     if until == "t_max" and t_max is None:
         raise _error("solver.until", "'t_max' needs solver.t_max (the time to run to)")
     flight = _bool(t["flight_steps"], "solver.flight_steps") if "flight_steps" in t else True
-    return SolverSpec(solver, rtol, atol, t_max, max_steps, n_output, dt_output, until, flight)
+    land = _bool(t["land_onsets"], "solver.land_onsets") if "land_onsets" in t else True
+    window = None
+    if "onset_window" in t:
+        window = parse_quantity(t["onset_window"], "dimensionless", "solver.onset_window")
+        _check(0 < window <= 1, "solver.onset_window", t["onset_window"], "must be in (0, 1] (contact times)")
+    return SolverSpec(solver, rtol, atol, t_max, max_steps, n_output, dt_output, until, flight, land, window)
 
 
 def parse_srs_table(table: Any, where: str) -> tuple[tuple[float, float], ...]:

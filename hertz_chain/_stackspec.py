@@ -80,7 +80,8 @@ _CONTACT_KEYS = (
     "damping",
     "clamp",
 ) + tuple(dict.fromkeys(key for row in LAWS.values() for key, _ in row.params))  # e.g. thornton's yield_pressure
-_SOLVER_KEYS = ("solver", "rtol", "atol", "t_max", "until", "max_steps", "n_output", "dt_output", "flight_steps")
+_SOLVER_KEYS = ("solver", "rtol", "atol", "t_max", "until", "max_steps", "n_output", "dt_output", "flight_steps",
+                "land_onsets", "onset_window")
 
 
 # --------------------------------------------------------------------------------------------------
@@ -254,6 +255,8 @@ class SolverSpec:
     dt_output: float | None = None
     until: str = "cascade"
     flight_steps: bool = True  # `Tolerances.flight_steps`: long steps through free flights
+    land_onsets: bool = True  # `Tolerances.land_onsets`: contact onsets met by a step end, stepped in s
+    onset_window: float | None = None  # `Tolerances.onset_window` (contact times), None: its default
 
 
 @dataclass(frozen=True)

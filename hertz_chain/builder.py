@@ -299,7 +299,10 @@ def _build(spec: StackSpec) -> BuiltStack:
         stack = _with_wall(spec, stack, state, laws, interfaces)
     s = spec.solver
     tol = {k: v for k, v in (("rtol", s.rtol), ("atol", s.atol)) if v is not None}
-    options = {"solver": s.solver, "tolerances": Tolerances(**tol, flight_steps=s.flight_steps)}
+    if s.onset_window is not None:
+        tol["onset_window"] = s.onset_window
+    options = {"solver": s.solver,
+               "tolerances": Tolerances(**tol, flight_steps=s.flight_steps, land_onsets=s.land_onsets)}
     if s.t_max is not None:
         options["t_max"] = s.t_max
     if s.max_steps is not None:

@@ -89,7 +89,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike
 
-from . import _config  # noqa: F401  (float64)
+from . import _config  # float64; SOLVE_COMPILER_OPTIONS
 from ._adjoint import _replayed_solve
 from ._export import cached_jit
 from ._results import BatchSolution, Solution, Trajectory, _to_solution
@@ -361,7 +361,7 @@ def _checked(v, status):
 
 # `replay` is a Python bool: static. Called on arrays (not under the user's `jit`/`grad`), the traced solve is
 # kept on disk as `simulate`'s is (`_export`; a differentiated call traces, and keeps the replayed adjoint)
-_launch_jit = cached_jit(_launch_impl, eqx.filter_jit(_launch_impl), "launch_velocity")
+_launch_jit = cached_jit(_launch_impl, "launch_velocity", _config.SOLVE_COMPILER_OPTIONS)
 
 
 def launch_velocity(
@@ -456,7 +456,8 @@ def prepare_launch(
         s, st = jax.tree_util.tree_unflatten(tree, full)
         return _checked(*_launch_impl(s, st, t_max_, cfg, False))
 
-    compiled = jax.jit(run)
+    # compile options only at the top level: a call under the caller's own `jit`/`vmap` takes the plain one
+    compiled, nested = jax.jit(run, compiler_options=_config.SOLVE_COMPILER_OPTIONS), jax.jit(run)
     prepared_for = _describe(stack)
 
     def launch(stack: Stack, state: State) -> Array:
@@ -466,7 +467,7 @@ def prepare_launch(
                 or [x for x, a in zip(lv, is_array) if not a] != others):
             raise ParameterError("stack, state", _describe(stack) if isinstance(stack, Stack) else type(stack).__name__,
                                  f"the structure prepared for: {prepared_for}")
-        return compiled(*arrays)
+        return (nested if any(isinstance(x, jax.core.Tracer) for x in arrays) else compiled)(*arrays)
 
     return launch
 

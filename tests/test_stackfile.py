@@ -494,6 +494,14 @@ def test_solver_settings():
     assert off.solver.flight_steps is False
     assert build(off).simulate_options["tolerances"].flight_steps is False
     assert_one_line_error(patched({"solver.flight_steps": "no"}), "solver.flight_steps", "true or false")
+    # onsets met: on by default with Tolerances' window, off or another window on request
+    assert s.land_onsets is True and s.onset_window is None
+    assert build(parse_stack(patched({}))).simulate_options["tolerances"].land_onsets is True
+    tol = build(parse_stack(patched({"solver.land_onsets": False, "solver.onset_window": 0.1}))).simulate_options["tolerances"]
+    assert (tol.land_onsets, tol.onset_window) == (False, 0.1)
+    assert_one_line_error(patched({"solver.land_onsets": 1}), "solver.land_onsets", "true or false")
+    assert_one_line_error(patched({"solver.onset_window": 0}), "solver.onset_window", "(0, 1]")
+    assert_one_line_error(patched({"solver.onset_window": "2 ms"}), "solver.onset_window", "plain number")
     assert_one_line_error(patched({"solver.n_output": 1}), "solver.n_output", ">= 2")
 
 
