@@ -204,6 +204,15 @@ def _load_or_export(path: Path, name: str, fn: Callable, leaves: list, dyn_tree,
     return jax.jit(run, compiler_options=compiler_options)
 
 
+def _top_level(args) -> bool:
+    """No JAX transformation is tracing the call (not under the caller's `jit`, `grad` or `vmap`)."""
+    try:
+        from jax._src.core import trace_state_clean  # JAX's own test (private: checked, with a fallback)
+    except ImportError:  # pragma: no cover
+        return not any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves(args))
+    return trace_state_clean()
+
+
 def cached_jit(fn: Callable, name: str, compiler_options: dict | None = None) -> Callable:
     """`eqx.filter_jit(fn)`, with the traced function kept on disk where that is exact (module docstring).
     A call at the top level (no argument traced) is compiled with XLA's `compiler_options`, the exported
@@ -211,15 +220,23 @@ def cached_jit(fn: Callable, name: str, compiler_options: dict | None = None) ->
     (JAX takes compile options only at the top level), compiled as the caller's is."""
     jitted = eqx.filter_jit(fn)
     top = eqx.filter_jit(fn, compiler_options=compiler_options) if compiler_options else jitted
+    keys: dict = {}  # the disk key of each call signature seen, so that a repeated call hashes nothing
 
     @functools.wraps(fn)
     def call(*args):
-        dyn, static = eqx.partition(args, eqx.is_array)
-        leaves, dyn_tree = jax.tree_util.tree_flatten(dyn)
-        if any(isinstance(x, jax.core.Tracer) for x in leaves):
+        if not _top_level(args):
             return jitted(*args)
         folder = _folder()
-        key = None if folder is None else _key(name, leaves, dyn_tree, static)
+        if folder is None:
+            return top(*args)
+        dyn, static = eqx.partition(args, eqx.is_array)
+        leaves, dyn_tree = jax.tree_util.tree_flatten(dyn)
+        try:
+            sig = (dyn_tree, static, tuple((np.shape(x), np.dtype(x.dtype), getattr(x, "weak_type", False))
+                                           for x in leaves), _settings(), str(folder))
+            key = keys[sig] if sig in keys else keys.setdefault(sig, _key(name, leaves, dyn_tree, static))
+        except TypeError:  # an unhashable static value: no memo
+            key = _key(name, leaves, dyn_tree, static)
         if key is None:
             return top(*args)
         if key not in _MEMO:

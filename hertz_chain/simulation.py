@@ -91,7 +91,7 @@ from jaxtyping import Array, ArrayLike
 
 from . import _config  # float64; SOLVE_COMPILER_OPTIONS
 from ._adjoint import _replayed_solve
-from ._export import cached_jit
+from ._export import _top_level
 from ._results import BatchSolution, Solution, Trajectory, _to_solution
 from ._scaling import Scales, _scales  # noqa: F401  (`_scales`: the benchmarks use it)
 from ._solve import (  # noqa: F401  (`_scaled_field`: the benchmarks' scipy comparison uses it)
@@ -349,19 +349,30 @@ def _launch_impl(stack, state, t_max, cfg, replay: bool):
     return out["launch_velocities"], out["status"]
 
 
+_NOT_ENDED = ("hertz_chain.launch_velocity: the cascade did not end (t_max or max_steps reached, no contact, "
+              "or a non-finite state); raise t_max or max_steps, or check the design")
+
+
 def _checked(v, status):
-    """`v`, or a run-time error where the solve did not end (`eqx.error_if`). Kept out of `_launch_jit`:
-    its host callback would keep the compiled solve out of JAX's persistent compilation cache."""
-    return eqx.error_if(
-        v, status > Status.COMPLETE_WITH_REBOUNDS,
-        "hertz_chain.launch_velocity: the cascade did not end (t_max or max_steps reached, no contact, "
-        "or a non-finite state); raise t_max or max_steps, or check the design",
-    )
+    """`v`, or an error where the solve did not end: `SolverError` when called on arrays, a run-time
+    error of the caller's compiled function under a trace (`eqx.error_if`). Kept out of `_launch_jit`:
+    a host callback would keep the compiled solve out of JAX's persistent compilation cache."""
+    if not isinstance(status, jax.core.Tracer):
+        if np.any(np.asarray(status) > Status.COMPLETE_WITH_REBOUNDS):
+            raise SolverError(_NOT_ENDED)
+        return v
+    return eqx.error_if(v, status > Status.COMPLETE_WITH_REBOUNDS, _NOT_ENDED)
 
 
-# `replay` is a Python bool: static. Called on arrays (not under the user's `jit`/`grad`), the traced solve is
-# kept on disk as `simulate`'s is (`_export`; a differentiated call traces, and keeps the replayed adjoint)
-_launch_jit = cached_jit(_launch_impl, "launch_velocity", _config.SOLVE_COMPILER_OPTIONS)
+# `replay` is a Python bool: static. At the top level compiled with `SOLVE_COMPILER_OPTIONS` (JAX takes them
+# only there); not kept on disk by `_export` as `simulate`'s solve is: the exported call's checks cost
+# ~0.3 ms per call, more than this function's whole fixed cost (JAX's compilation cache still keeps it)
+_launch_plain = eqx.filter_jit(_launch_impl)
+_launch_top = eqx.filter_jit(_launch_impl, compiler_options=_config.SOLVE_COMPILER_OPTIONS)
+
+
+def _launch_jit(*args):
+    return (_launch_top if _top_level(args) else _launch_plain)(*args)
 
 
 def launch_velocity(
@@ -380,8 +391,8 @@ def launch_velocity(
     Use inside `jax.grad` (`adjoint="reverse"`) or `jax.jacfwd`/`jax.jvp` (`adjoint="forward"`), e.g.
     `jax.grad(lambda m: launch_velocity(Stack(m, law, gravity=0.0), at_impact(...))[-1])(masses)`.
     Tolerances default to `rtol = atol = 1e-11` with `resolve_onsets=True`, where gradients matched central
-    finite differences to 3.5e-6 (module docstring). A failed solve raises an error at run time
-    (`eqx.error_if`), never a silent NaN.
+    finite differences to 3.5e-6 (module docstring). A failed solve raises `SolverError` (under the
+    caller's own `jit`/`grad`/`vmap`, a run-time error through `eqx.error_if`), never a silent NaN.
 
     **Laws whose onset is not smooth** (`registry.LawRow.smooth_onset` is False: Tsuji, Kelvin–Voigt,
     viscoelastic): their `delta^(1/4)`, `sqrt(delta)` or jumping dashpot term has an unbounded derivative
