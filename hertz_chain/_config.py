@@ -43,10 +43,18 @@ def expose_cpu_cores() -> int | None:
 #: XLA options of the compiled single solves (`simulate`, `launch_velocity`, `prepare_launch`; not batches):
 #: XLA's older CPU loop emitters. A single solve is a loop of many tiny kernels, which the older emitters
 #: compile ~25 % faster and run ~10-14 % faster (10-mass gapped Tsuji: 7.1 -> 6.1 ms, compile 3.8 -> 2.8 s);
-#: a batch of 1,024 designs runs ~40 % slower with them, so batches keep XLA's default. Other backends
-#: ignore the option. Results differ from the default emitters' by rounding (~1e-11 relative), well inside
-#: the solver's tolerance. docs/solver-defaults.md, "XLA's loop emitters".
+#: a batch of 1,024 designs runs ~40 % slower with them, so batches keep XLA's default. CPU only: XLA
+#: refuses a CPU option on another backend ("No such compile option", seen on an NVIDIA H200), so the
+#: callers take them through `solve_compiler_options()`. Results differ from the default emitters' by
+#: rounding (~1e-11 relative), well inside the solver's tolerance. docs/solver-defaults.md, "XLA's loop
+#: emitters".
 SOLVE_COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
+
+
+def solve_compiler_options() -> dict | None:
+    """`SOLVE_COMPILER_OPTIONS` where JAX computes on the CPU (its default backend now), else None (a GPU
+    or TPU takes XLA's defaults). Costs ~0.3 us: callers ask at every call."""
+    return SOLVE_COMPILER_OPTIONS if jax.default_backend() == "cpu" else None
 
 CACHE_DIR: str | None = None
 """The compilation cache folder in use (None: off); `_export` keeps its traced functions below it."""

@@ -213,19 +213,30 @@ def _top_level(args) -> bool:
     return trace_state_clean()
 
 
-def cached_jit(fn: Callable, name: str, compiler_options: dict | None = None) -> Callable:
+def cached_jit(fn: Callable, name: str, compiler_options: Callable[[], dict | None] | None = None) -> Callable:
     """`eqx.filter_jit(fn)`, with the traced function kept on disk where that is exact (module docstring).
-    A call at the top level (no argument traced) is compiled with XLA's `compiler_options`, the exported
-    module too; a call under the caller's own `jit`, `grad` or `vmap` is part of the caller's computation
-    (JAX takes compile options only at the top level), compiled as the caller's is."""
+    A call at the top level (no argument traced) is compiled with the XLA options that
+    `compiler_options()` returns at the call (None: XLA's defaults; e.g. `_config.solve_compiler_options`,
+    CPU options on the CPU backend only), the exported module too; a call under the caller's own `jit`,
+    `grad` or `vmap` is part of the caller's computation (JAX takes compile options only at the top
+    level), compiled as the caller's is."""
     jitted = eqx.filter_jit(fn)
-    top = eqx.filter_jit(fn, compiler_options=compiler_options) if compiler_options else jitted
+    tops: dict = {}  # one jit per set of options
+
+    def top_for(options: dict | None) -> Callable:
+        if not options:
+            return jitted
+        k = tuple(sorted(options.items()))
+        return tops[k] if k in tops else tops.setdefault(k, eqx.filter_jit(fn, compiler_options=options))
+
     keys: dict = {}  # the disk key of each call signature seen, so that a repeated call hashes nothing
 
     @functools.wraps(fn)
     def call(*args):
         if not _top_level(args):
             return jitted(*args)
+        options = compiler_options() if compiler_options else None
+        top = top_for(options)
         folder = _folder()
         if folder is None:
             return top(*args)
@@ -241,7 +252,7 @@ def cached_jit(fn: Callable, name: str, compiler_options: dict | None = None) ->
             return top(*args)
         if key not in _MEMO:
             _MEMO[key] = _load_or_export(folder / f"{key}.jaxexport", name, fn, leaves, dyn_tree, static,
-                                         compiler_options)
+                                         options)
         run = _MEMO[key]
         if run is None:
             return top(*args)

@@ -247,7 +247,7 @@ def _solve_plain(stack: Stack, state: State, ts, t_max, cfg: _SolveConfig) -> di
 
 
 # a traced solve is kept on disk where that is exact (`_export`)
-_solve = cached_jit(_solve_plain, "simulate._solve", _config.SOLVE_COMPILER_OPTIONS)
+_solve = cached_jit(_solve_plain, "simulate._solve", _config.solve_compiler_options)
 
 
 def _history_impl(stack: Stack, history, sc: Scales, rows: int):

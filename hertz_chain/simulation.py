@@ -372,7 +372,7 @@ _launch_top = eqx.filter_jit(_launch_impl, compiler_options=_config.SOLVE_COMPIL
 
 
 def _launch_jit(*args):
-    return (_launch_top if _top_level(args) else _launch_plain)(*args)
+    return (_launch_top if _top_level(args) and _config.solve_compiler_options() else _launch_plain)(*args)
 
 
 def launch_velocity(
@@ -468,7 +468,9 @@ def prepare_launch(
         return _checked(*_launch_impl(s, st, t_max_, cfg, False))
 
     # compile options only at the top level: a call under the caller's own `jit`/`vmap` takes the plain one
-    compiled, nested = jax.jit(run, compiler_options=_config.SOLVE_COMPILER_OPTIONS), jax.jit(run)
+    nested = jax.jit(run)
+    options = _config.solve_compiler_options()  # CPU options on the CPU backend only
+    compiled = jax.jit(run, compiler_options=options) if options else nested
     prepared_for = _describe(stack)
 
     def launch(stack: Stack, state: State) -> Array:

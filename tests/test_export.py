@@ -199,3 +199,29 @@ def test_prune_keeps_this_fingerprint_and_at_most_max_entries(tmp_path, monkeypa
     _export._prune(tmp_path, mine[-1])
     left = sorted(p.name for p in tmp_path.iterdir())
     assert left == ["bbbb-2.jaxexport", "bbbb-3.jaxexport", "bbbb-4.jaxexport"]
+
+
+def test_cpu_compile_options_only_on_the_cpu_backend(tmp_path, monkeypatch):
+    """XLA refuses a CPU option on another backend ("No such compile option: 'xla_cpu_use_fusion_emitters'",
+    seen on an NVIDIA H200), so the single solves take `SOLVE_COMPILER_OPTIONS` on the CPU backend only.
+    Here the options are made invalid for every backend: reported as the CPU backend, the solve must fail
+    with them (so the options do reach XLA); reported as a GPU, the same solves must run without them and
+    agree with the solve compiled inside the caller's own jit (never given options) to round-off: the two
+    programs fuse differently, measured 1.4e-13 relative."""
+    monkeypatch.setenv("HERTZ_CHAIN_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(_config, "SOLVE_COMPILER_OPTIONS", {"xla_hertz_chain_no_such_option": True})
+    stack = hc.Stack([1.0, 0.4, 0.2], hc.Hertz(1e9), gravity=0.0)
+    state = hc.at_impact(stack, 1.0, gaps=1e-4)
+    # the reference: under the caller's own jit, where no compile options are taken on any backend
+    import jax
+
+    ref = jax.jit(lambda st: hc.launch_velocity(stack, st))(state)
+    assert _config.solve_compiler_options() is not None
+    with pytest.raises(Exception, match="xla_hertz_chain_no_such_option"):
+        hc.prepare_launch(stack, state)(stack, state)
+    monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
+    assert _config.solve_compiler_options() is None
+    np.testing.assert_allclose(hc.prepare_launch(stack, state)(stack, state), ref, rtol=1e-12)
+    np.testing.assert_allclose(hc.launch_velocity(stack, state), ref, rtol=1e-12)
+    sol = hc.simulate(stack, state)
+    np.testing.assert_allclose(sol.launch_velocities, ref, rtol=1e-9)
