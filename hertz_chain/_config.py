@@ -1,4 +1,5 @@
-"""One place for process-wide JAX settings: float64, CPU cores as devices, the compilation cache.
+"""One place for process-wide JAX settings: float64, CPU cores as devices, CPU computations run inline,
+the compilation cache.
 
 Imported (for its side effects) by every module that uses JAX, before any array is created.
 """
@@ -14,6 +15,33 @@ from ._cache import cache_dir
 jax.config.update("jax_enable_x64", True)
 
 
+def _jax_started() -> bool:
+    """JAX's backends exist already (their settings can no longer change), or we cannot tell."""
+    try:
+        from jax._src import xla_bridge
+
+        return bool(xla_bridge.backends_are_initialized())
+    except (ImportError, AttributeError):  # pragma: no cover  (private API moved: leave JAX alone)
+        return True
+
+
+def run_cpu_computations_inline() -> bool:
+    """Run each CPU computation on the calling thread (``jax_cpu_enable_async_dispatch = False``).
+
+    JAX's CPU client otherwise hands every computation of more than ~1,000 flops to a worker thread and
+    the caller waits for it: on the 2-core machine of `benchmarks/` that handoff cost ~170-200 us per call
+    (a prepared two-mass launch: median 370-430 us per call asynchronously, 205 us inline), more than the
+    whole fixed cost budget of a repeated solve. Parallel computations (a batch split over the CPU
+    devices) still run one thread per device. Only before JAX has started, and only when the user has not
+    chosen (``JAX_CPU_ENABLE_ASYNC_DISPATCH`` in the environment, or ``jax.config.update`` after importing
+    hertz_chain and before the first computation). Returns whether it was set.
+    """
+    if _jax_started() or "JAX_CPU_ENABLE_ASYNC_DISPATCH" in os.environ:
+        return False
+    jax.config.update("jax_cpu_enable_async_dispatch", False)
+    return True
+
+
 def expose_cpu_cores() -> int | None:
     """Make every CPU core a JAX device, so that `simulate_batch` can split a batch over the cores (XLA
     runs one design loop per device on one thread). Only before JAX has started, and only when the user
@@ -21,12 +49,7 @@ def expose_cpu_cores() -> int | None:
     ``HERTZ_CHAIN_CPU_DEVICES=N`` sets the number (1: one device). No effect on GPU machines' GPUs.
     Returns the number set, or None.
     """
-    try:
-        from jax._src import xla_bridge
-
-        if xla_bridge.backends_are_initialized():
-            return None
-    except (ImportError, AttributeError):  # pragma: no cover  (private API moved: leave JAX alone)
+    if _jax_started():
         return None
     if "xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", "") \
             or jax.config.jax_num_cpu_devices != -1:
@@ -85,3 +108,4 @@ def enable_compilation_cache(path: str | None = None) -> str | None:
 
 enable_compilation_cache()
 expose_cpu_cores()
+run_cpu_computations_inline()

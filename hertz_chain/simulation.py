@@ -452,8 +452,8 @@ def prepare_launch(
     **Returns:** the function `launch(stack, state)`.
 
     **Raises:** `ParameterError` for bad options (here), and, from `launch`, for a stack or state of
-    another structure; a solve that does not end raises at run time (`eqx.error_if`), as in
-    `launch_velocity`.
+    another structure; from `launch`, a solve that does not end raises `SolverError` (under the caller's
+    own `jit`, `grad` or `vmap`, a run-time error through `eqx.error_if`), as `launch_velocity` does.
     """
     t_max_, cfg = _launch_config(stack, state, solver, tolerances, t_max, max_steps, "reverse", until)
     all_leaves, tree = jax.tree_util.tree_flatten((stack, state))
@@ -461,16 +461,19 @@ def prepare_launch(
     others = [x for x, a in zip(all_leaves, is_array) if not a]
     shapes = [np.shape(x) for x, a in zip(all_leaves, is_array) if a]
 
-    def run(*lv):
+    def run(*lv):  # (launch velocities, status)
         it = iter(lv)
         full = [next(it) if a else x for x, a in zip(all_leaves, is_array)]
         s, st = jax.tree_util.tree_unflatten(tree, full)
-        return _checked(*_launch_impl(s, st, t_max_, cfg, False))
+        return _launch_impl(s, st, t_max_, cfg, False)
 
-    # compile options only at the top level: a call under the caller's own `jit`/`vmap` takes the plain one
-    nested = jax.jit(run)
-    options = _config.solve_compiler_options()  # CPU options on the CPU backend only
-    compiled = jax.jit(run, compiler_options=options) if options else nested
+    # At the top level the status is checked on the host after the compiled solve (`_checked`: a
+    # `SolverError`; an `eqx.error_if` inside would raise only when the result is read on a GPU, and keeps
+    # the program out of JAX's persistent cache), with compile options (CPU ones on the CPU backend only);
+    # under the caller's own `jit`/`vmap`/`grad`, `eqx.error_if` in the caller's program, no options
+    nested = jax.jit(lambda *lv: _checked(*run(*lv)))
+    options = _config.solve_compiler_options()
+    compiled = jax.jit(run, compiler_options=options) if options else jax.jit(run)
     prepared_for = _describe(stack)
 
     def launch(stack: Stack, state: State) -> Array:
@@ -480,7 +483,9 @@ def prepare_launch(
                 or [x for x, a in zip(lv, is_array) if not a] != others):
             raise ParameterError("stack, state", _describe(stack) if isinstance(stack, Stack) else type(stack).__name__,
                                  f"the structure prepared for: {prepared_for}")
-        return (nested if any(isinstance(x, jax.core.Tracer) for x in arrays) else compiled)(*arrays)
+        if any(isinstance(x, jax.core.Tracer) for x in arrays):
+            return nested(*arrays)
+        return _checked(*compiled(*arrays))
 
     return launch
 

@@ -56,6 +56,18 @@ def test_cpu_cores_become_devices_unless_the_user_chose():
     assert _devices_in_subprocess({"HERTZ_CHAIN_CPU_DEVICES": "3"}, started) == 1
 
 
+def test_cpu_computations_run_inline_unless_the_user_chose():
+    # _config.run_cpu_computations_inline: JAX's CPU client runs computations on the calling thread (its
+    # worker-thread handoff cost ~170-200 us per call), unless the user set JAX_CPU_ENABLE_ASYNC_DISPATCH
+    # or started JAX before importing hertz_chain
+    flag = "print(int(jax.config.values['jax_cpu_enable_async_dispatch']))"
+    code = "import hertz_chain.simulation, jax; jax.numpy.zeros(1); " + flag
+    started = "import jax; jax.numpy.zeros(1); import hertz_chain.simulation; " + flag
+    assert _devices_in_subprocess({}, code) == 0
+    assert _devices_in_subprocess({"JAX_CPU_ENABLE_ASYNC_DISPATCH": "1"}, code) == 1
+    assert _devices_in_subprocess({}, started) == 1
+
+
 def test_a_renamed_name_fails_with_its_new_name():
     # CHANGELOG.md's table: the old public names point to the new ones
     import pytest

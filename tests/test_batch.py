@@ -64,6 +64,8 @@ def test_batch_split_over_devices_equals_individual(piece, monkeypatch):
     # last padded), as a large batch on a CPU runs.
     from hertz_chain import simulation
 
+    if jax.default_backend() != "cpu":
+        pytest.skip("conftest's two CPU devices: the CPU backend only (an accelerator is one device here)")
     if piece is not None:
         monkeypatch.setattr(simulation, "CPU_PIECE_PER_DEVICE", piece)
     assert jax.local_device_count() == 2
