@@ -86,3 +86,27 @@ def test_batch_split_over_devices_equals_individual(piece, monkeypatch):
             # the audit (~1e-11 here: the solver's truncation error) is kept while solving without the
             # history, from the saved steps with it; batched rounding moves the steps, not the audit
             assert batch.energy_error[i] == pytest.approx(one.energy_error, rel=1e-3)
+
+
+def test_cpu_pieces_take_the_designs_in_the_order_of_their_regime_number():
+    """`simulation._regime_numbers`, the order of a CPU batch's pieces, is log(summed gaps / peak overlap
+    at the drop speed): for Hertz contacts the peak overlap is (5 mu v^2 / (4 k))^(2/5) (Johnson 1985,
+    §11.1), independent of the gap, so doubling every gap adds log 2 and a 32 times stiffer contact adds
+    log 32^(2/5) = log 4 (the regime number Pi = gap / (t_c V) of the sweeps' regime map). The unsorting
+    of the results is tested above (the five designs there come in reverse order)."""
+    from hertz_chain.contact import Hertz
+    from hertz_chain.simulation import _regime_numbers
+
+    def key(k, gap):
+        stack = Stack([1.0, 0.5, 0.25], Hertz(k), gravity=0.0)
+        state = at_impact(stack, 1.0, gap)
+        batch = jax.tree.map(lambda a: jnp.stack([a]), state)
+        return float(_regime_numbers(stack_designs([stack]), batch)[0])
+
+    base = key(1e9, 1e-3)
+    # the scale is the smallest peak overlap of the interfaces: at equal k, the smaller effective mass
+    mu = min(1.0 * 0.5 / 1.5, 0.5 * 0.25 / 0.75)
+    overlap = (5 * mu * 1.0**2 / (4 * 1e9)) ** 0.4
+    assert base == pytest.approx(np.log(2e-3 / overlap + 1e-6), rel=1e-3)
+    assert key(1e9, 2e-3) - base == pytest.approx(np.log(2.0), abs=1e-6)
+    assert key(32e9, 1e-3) - base == pytest.approx(np.log(4.0), abs=1e-6)
