@@ -33,8 +33,9 @@ def run_cpu_computations_inline() -> bool:
     (a prepared two-mass launch: median 370-430 us per call asynchronously, 205 us inline), more than the
     whole fixed cost budget of a repeated solve. Parallel computations (a batch split over the CPU
     devices) still run one thread per device. Only before JAX has started, and only when the user has not
-    chosen (``JAX_CPU_ENABLE_ASYNC_DISPATCH`` in the environment, or ``jax.config.update`` after importing
-    hertz_chain and before the first computation). Returns whether it was set.
+    chosen: ``JAX_CPU_ENABLE_ASYNC_DISPATCH`` in the environment, or ``jax.config.update`` *after*
+    importing hertz_chain and before the first computation (an update before the import cannot be told
+    from JAX's default, and is overridden). Returns whether it was set.
     """
     if _jax_started() or "JAX_CPU_ENABLE_ASYNC_DISPATCH" in os.environ:
         return False

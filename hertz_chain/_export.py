@@ -50,7 +50,7 @@ import numpy as np
 
 from . import _config
 
-_MEMO: dict[str, Callable | None] = {}
+_MEMO: dict[tuple, Callable | None] = {}  # (disk key, compile options) -> the exported call
 MAX_ENTRIES = 256
 _TRUSTED = ("hertz_chain", "jax", "jaxlib", "equinox", "diffrax", "lineax", "optimistix", "builtins",
             "collections")
@@ -250,16 +250,17 @@ def cached_jit(fn: Callable, name: str, compiler_options: Callable[[], dict | No
             key = _key(name, leaves, dyn_tree, static)
         if key is None:
             return top(*args)
-        if key not in _MEMO:
-            _MEMO[key] = _load_or_export(folder / f"{key}.jaxexport", name, fn, leaves, dyn_tree, static,
-                                         options)
-        run = _MEMO[key]
+        memo = (key, tuple(sorted(options.items())) if options else None)  # the module is compiled with them
+        if memo not in _MEMO:
+            _MEMO[memo] = _load_or_export(folder / f"{key}.jaxexport", name, fn, leaves, dyn_tree, static,
+                                          options)
+        run = _MEMO[memo]
         if run is None:
             return top(*args)
         try:
             return run(*leaves)
         except Exception:  # a file that loads but does not fit, a changed setting, ...: never the user's problem
-            _MEMO[key] = None
+            _MEMO[memo] = None
             return top(*args)
 
     return call

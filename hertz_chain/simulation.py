@@ -168,21 +168,25 @@ _CONFIGS: dict = {}  # the solve configurations made, by their options (a repeat
 
 
 def _config_for(solver, tolerances, max_steps, adjoint, save_steps, until) -> _SolveConfig:
-    """The `_SolveConfig` of these (checked) options, made once per distinct set of hashable options."""
+    """The `_SolveConfig` of these (checked) options, made once per distinct set of hashable options (and
+    made again when the registry row of a solver name has been replaced since)."""
+    from .registry import SOLVERS
+
+    row = SOLVERS.get(str(solver).lower()) if isinstance(solver, str) else None
     try:
-        key = (solver, tolerances, max_steps, adjoint, save_steps, until)
+        key = (solver, id(row), tolerances, max_steps, adjoint, bool(save_steps), until)
         hash(key)
     except TypeError:  # a solver, adjoint or tolerance that cannot be hashed: made afresh
         key = None
-    if key is not None and key in _CONFIGS:
-        return _CONFIGS[key]
+    if key is not None and key in _CONFIGS and _CONFIGS[key][0] is row:
+        return _CONFIGS[key][1]
     tol = eqx.tree_at(lambda t: (t.rtol, t.atol), tolerances,
                       (np.asarray(float(tolerances.rtol)), np.asarray(float(tolerances.atol))))
     cfg = _SolveConfig(make_solver(solver, tol), tol, max_steps, _make_adjoint(adjoint, max_steps), save_steps, until)
     if key is not None:
         if len(_CONFIGS) >= 256:
             _CONFIGS.pop(next(iter(_CONFIGS)))
-        _CONFIGS[key] = cfg
+        _CONFIGS[key] = (row, cfg)  # the row kept alive: its id cannot be reused while the entry lives
     return cfg
 
 
@@ -419,11 +423,17 @@ def _checked(v, status):
 # only there); not kept on disk by `_export` as `simulate`'s solve is: the exported call's checks cost
 # ~0.3 ms per call, more than this function's whole fixed cost (JAX's compilation cache still keeps it)
 _launch_plain = eqx.filter_jit(_launch_impl)
-_launch_top = eqx.filter_jit(_launch_impl, compiler_options=_config.SOLVE_COMPILER_OPTIONS)
+_launch_tops: dict = {}  # one jit per set of compile options
 
 
 def _launch_jit(*args):
-    return (_launch_top if _top_level(args) and _config.solve_compiler_options() else _launch_plain)(*args)
+    options = _config.solve_compiler_options() if _top_level(args) else None
+    if not options:
+        return _launch_plain(*args)
+    k = tuple(sorted(options.items()))
+    if k not in _launch_tops:
+        _launch_tops[k] = eqx.filter_jit(_launch_impl, compiler_options=options)
+    return _launch_tops[k](*args)
 
 
 def launch_velocity(

@@ -181,10 +181,10 @@ def test_a_failing_exported_call_falls_back(tmp_path, monkeypatch):
     def broken(*_):
         raise ValueError("Dtype mismatch")
 
-    monkeypatch.setattr(_export, "_MEMO", {key: broken})
+    monkeypatch.setattr(_export, "_MEMO", {(key, None): broken})  # (disk key, compile options)
     out = _export.cached_jit(fn, "t")(x)
     np.testing.assert_array_equal(out["y"], [0.0, 2.0, 4.0])
-    assert calls == ["traced"] and _export._MEMO[key] is None
+    assert calls == ["traced"] and _export._MEMO[(key, None)] is None
 
 
 def test_prune_keeps_this_fingerprint_and_at_most_max_entries(tmp_path, monkeypatch):
@@ -203,25 +203,30 @@ def test_prune_keeps_this_fingerprint_and_at_most_max_entries(tmp_path, monkeypa
 
 def test_cpu_compile_options_only_on_the_cpu_backend(tmp_path, monkeypatch):
     """XLA refuses a CPU option on another backend ("No such compile option: 'xla_cpu_use_fusion_emitters'",
-    seen on an NVIDIA H200), so the single solves take `SOLVE_COMPILER_OPTIONS` on the CPU backend only.
-    Here the options are made invalid for every backend: reported as the CPU backend, the solve must fail
-    with them (so the options do reach XLA); reported as a GPU, `prepare_launch`, `launch_velocity` and
-    `simulate` (each its own path to the options) must run without them and give paper Eq 19 for two
-    elastic masses (ratio 0.3, gap 1 cm, no gravity: mass 1 bounces off the ground first, so the top
-    leaves at 2 (2 / 1.3) - 1 times the drop speed) to 1e-8."""
+    seen on an NVIDIA H200), so the single solves take `SOLVE_COMPILER_OPTIONS` on the CPU backend only,
+    asked at each call. Here the options are made invalid for every backend: reported as the CPU backend,
+    `prepare_launch`, `launch_velocity` and `simulate` (through the disk cache of traced solves; each its
+    own path to the options) must fail with them, so the options do reach XLA on every path; reported as a
+    GPU, the same three must run without them and give paper Eq 19 for two elastic masses (ratio 0.3,
+    gap 1 cm, no gravity: mass 1 bounces off the ground first, so the top leaves at 2 (2 / 1.3) - 1
+    times the drop speed) to 1e-8."""
     import jax
 
     if jax.default_backend() != "cpu":
         pytest.skip("reports the backend as the CPU: on the CPU backend only")
-    monkeypatch.setenv("HERTZ_CHAIN_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(_config, "CACHE_DIR", str(tmp_path))  # a fresh disk cache of traced solves
+    monkeypatch.setattr(_export, "_MEMO", {})
     monkeypatch.setattr(_config, "SOLVE_COMPILER_OPTIONS", {"xla_hertz_chain_no_such_option": True})
     stack = hc.Stack([1.0, 0.3], hc.Hertz(1e9), gravity=0.0)
     state = hc.at_impact(stack, 1.0, 0.01)
     tol = hc.Tolerances(rtol=1e-11, atol=1e-11)
     eq19 = 2 * (2 / 1.3) - 1
     assert _config.solve_compiler_options() is not None
-    with pytest.raises(Exception, match="xla_hertz_chain_no_such_option"):
-        hc.prepare_launch(stack, state, tolerances=tol)(stack, state)
+    for call in (lambda: hc.prepare_launch(stack, state, tolerances=tol)(stack, state),
+                 lambda: hc.launch_velocity(stack, state, tolerances=tol),
+                 lambda: hc.simulate(stack, state, tolerances=tol)):
+        with pytest.raises(Exception, match="xla_hertz_chain_no_such_option"):
+            call()
     monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
     assert _config.solve_compiler_options() is None
     assert float(hc.prepare_launch(stack, state, tolerances=tol)(stack, state)[-1]) == pytest.approx(eq19, rel=1e-8)

@@ -135,3 +135,17 @@ atol = 1e-10
     rigid = simulate_rigid([1.0, 0.3], [1.0, 0.0], [0.0, 1e-3], 1.0)
     assert sol.ok
     np.testing.assert_allclose(sol.launch_velocities, rigid.launch_velocities, rtol=1e-7)
+
+
+def test_a_replaced_solver_row_is_used_by_the_next_call(monkeypatch):
+    """The entry points memoise their solve configuration by the options (`simulation._config_for`); a
+    registry row replaced under the same name must still be read by the next call, not the memo's."""
+    from hertz_chain import simulation
+
+    tol = hc.Tolerances(rtol=1e-8, atol=1e-8)
+    first = simulation._config_for("tsit5", tol, 100, None, False, "cascade")
+    monkeypatch.setitem(registry.SOLVERS, "tsit5", registry.SOLVERS["dopri5"])
+    second = simulation._config_for("tsit5", tol, 100, None, False, "cascade")
+    assert type(second.solver) is type(registry.SOLVERS["dopri5"].make(tol))
+    assert type(second.solver) is not type(first.solver)
+    assert simulation._config_for("tsit5", tol, 100, None, False, "cascade") is second  # memoised again
