@@ -28,6 +28,26 @@ QUICK_DIFFRAX_METHODS = ("tsit5", "tsit5-diffrax", "dopri8")
 SCIPY_METHODS = ("DOP853", "Radau", "LSODA")
 MAX_STEP = hc.Tolerances().max_step  # scaled units (contact times), the library default
 
+def interleaved_medians(fns: dict, rounds: int, warmup: int = 1, budget_s: float = 6.0) -> dict:
+    """Median wall time (s) of each of `fns` (name -> a call that blocks), timed in alternation: every
+    round calls each once, so a slow spell of a shared machine falls on all of them alike and their
+    ratios keep (timing them one after the other let a minute's load move a ratio by 30 %). Up to
+    `rounds` rounds after `warmup`, stopping once the rounds have used `budget_s` (at least one)."""
+    for _ in range(warmup):
+        for fn in fns.values():
+            fn()
+    ts: dict = {k: [] for k in fns}
+    spent = 0.0
+    while len(next(iter(ts.values()))) < rounds and (spent == 0.0 or spent < budget_s):
+        for k, fn in fns.items():
+            t0 = time.perf_counter()
+            fn()
+            dt = time.perf_counter() - t0
+            ts[k].append(dt)
+            spent += dt
+    return {k: statistics.median(v) for k, v in ts.items()}
+
+
 def median_time(fn, repeats: int, warmup: int = 1, budget_s: float = 3.0) -> float:
     """Median wall time (s) of `fn()` (which blocks) over up to `repeats` calls after `warmup` calls;
     stops repeating once the timed calls have used `budget_s` (at least one timed call)."""
