@@ -213,6 +213,23 @@ def _top_level(args) -> bool:
     return trace_state_clean()
 
 
+def jit_per_options(fn: Callable) -> Callable[[dict | None], Callable]:
+    """A function of XLA compile options (a dict, or None for XLA's defaults) returning `eqx.filter_jit(fn)`
+    compiled with them: one jit per distinct set of options, made on first use."""
+    plain = eqx.filter_jit(fn)
+    made: dict = {}
+
+    def with_options(options: dict | None) -> Callable:
+        if not options:
+            return plain
+        k = tuple(sorted(options.items()))
+        if k not in made:
+            made[k] = eqx.filter_jit(fn, compiler_options=options)
+        return made[k]
+
+    return with_options
+
+
 def cached_jit(fn: Callable, name: str, compiler_options: Callable[[], dict | None] | None = None) -> Callable:
     """`eqx.filter_jit(fn)`, with the traced function kept on disk where that is exact (module docstring).
     A call at the top level (no argument traced) is compiled with the XLA options that
@@ -220,15 +237,8 @@ def cached_jit(fn: Callable, name: str, compiler_options: Callable[[], dict | No
     CPU options on the CPU backend only), the exported module too; a call under the caller's own `jit`,
     `grad` or `vmap` is part of the caller's computation (JAX takes compile options only at the top
     level), compiled as the caller's is."""
-    jitted = eqx.filter_jit(fn)
-    tops: dict = {}  # one jit per set of options
-
-    def top_for(options: dict | None) -> Callable:
-        if not options:
-            return jitted
-        k = tuple(sorted(options.items()))
-        return tops[k] if k in tops else tops.setdefault(k, eqx.filter_jit(fn, compiler_options=options))
-
+    top_for = jit_per_options(fn)
+    jitted = top_for(None)
     keys: dict = {}  # the disk key of each call signature seen, so that a repeated call hashes nothing
 
     @functools.wraps(fn)

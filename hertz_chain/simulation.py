@@ -91,7 +91,7 @@ from jaxtyping import Array, ArrayLike
 
 from . import _config  # float64; SOLVE_COMPILER_OPTIONS
 from ._adjoint import _replayed_solve
-from ._export import _top_level
+from ._export import _top_level, jit_per_options
 from ._results import BatchSolution, Solution, Trajectory, _to_solution
 from ._scaling import Scales, _scales  # noqa: F401  (`_scales`: the benchmarks use it)
 from ._solve import (  # noqa: F401  (`_scaled_field`: the benchmarks' scipy comparison uses it)
@@ -419,21 +419,14 @@ def _checked(v, status):
     return eqx.error_if(v, status > Status.COMPLETE_WITH_REBOUNDS, _NOT_ENDED)
 
 
-# `replay` is a Python bool: static. At the top level compiled with `SOLVE_COMPILER_OPTIONS` (JAX takes them
-# only there); not kept on disk by `_export` as `simulate`'s solve is: the exported call's checks cost
+# `replay` is a Python bool: static. At the top level compiled with `_config.solve_compiler_options()` (JAX
+# takes options only there); not kept on disk by `_export` as `simulate`'s solve is: the exported call's checks cost
 # ~0.3 ms per call, more than this function's whole fixed cost (JAX's compilation cache still keeps it)
-_launch_plain = eqx.filter_jit(_launch_impl)
-_launch_tops: dict = {}  # one jit per set of compile options
+_launch_with = jit_per_options(_launch_impl)
 
 
 def _launch_jit(*args):
-    options = _config.solve_compiler_options() if _top_level(args) else None
-    if not options:
-        return _launch_plain(*args)
-    k = tuple(sorted(options.items()))
-    if k not in _launch_tops:
-        _launch_tops[k] = eqx.filter_jit(_launch_impl, compiler_options=options)
-    return _launch_tops[k](*args)
+    return _launch_with(_config.solve_compiler_options() if _top_level(args) else None)(*args)
 
 
 def launch_velocity(
