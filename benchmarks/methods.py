@@ -28,6 +28,7 @@ QUICK_DIFFRAX_METHODS = ("tsit5", "tsit5-diffrax", "dopri8")
 SCIPY_METHODS = ("DOP853", "Radau", "LSODA")
 MAX_STEP = hc.Tolerances().max_step  # scaled units (contact times), the library default
 
+
 def interleaved_medians(fns: dict, rounds: int, warmup: int = 1, budget_s: float = 6.0) -> dict:
     """Median wall time (s) of each of `fns` (name -> a call that blocks), timed in alternation: every
     round calls each once, so a slow spell of a shared machine falls on all of them alike and their

@@ -556,15 +556,10 @@ def _write_chunk(path: Path, plan: _Plan, c: int, res: dict) -> None:
     """Write chunk `c`'s results into its region, then its marker (atomically)."""
     r = plan.region(c)
     shape = (r.stop - r.start,) + plan.shape[1:]
-    dims = plan.dims
-    data = {}
-    for name in VARIABLES:
-        v = res[name]
-        extra = (_EXTRA_DIM[name],) if name in _EXTRA_DIM else ()
-        data[name] = (dims + extra, v.reshape(shape + v.shape[1:]))
-    if dims == ("design",):
+    data = {name: res[name].reshape(shape + res[name].shape[1:]) for name in VARIABLES}
+    if plan.dims == ("design",):
         for k, a in enumerate(plan.sweep.axes):
-            data[a.label] = (("design",), res["values"][:, k])
+            data[a.label] = res["values"][:, k]
     # straight into the arrays that `_create_store` made through xarray (same dtypes; NaN and -1 as its
     # fill values): xarray's region writes re-read and checked the store's layout at every chunk, ~2x
     # the time of the writes themselves
@@ -577,7 +572,7 @@ def _write_chunk(path: Path, plan: _Plan, c: int, res: dict) -> None:
         if i == half:
             _fault("mid-data", c)
         arr = group[name]
-        arr[r.start : r.stop] = np.asarray(data[name][1], dtype=arr.dtype)
+        arr[r.start : r.stop] = np.asarray(data[name], dtype=arr.dtype)
     _fault("after-data", c)
     group["chunk_done"][c] = 1
 
