@@ -189,6 +189,10 @@ def _launch_outputs(stack: Stack, sc: Scales, scale, core: dict, until: str = "c
     t_end = jnp.where(held, t_fin, t_end)
     status = jnp.where(jnp.all(jnp.isfinite(y_fin)) | (status == Status.INCOMPLETE_MAX_STEPS), status,
                        Status.FAILED)
+    # a run that ended with a non-finite launch velocity (parameters outside what the laws allow, e.g. a
+    # negative mass set past `Stack`'s checks) failed: its headline results are not valid
+    ended = (status == Status.COMPLETE) | (status == Status.COMPLETE_WITH_REBOUNDS)
+    status = jnp.where(ended & ~jnp.all(jnp.isfinite(v_launch)), Status.FAILED, status)
     return dict(
         status=status,
         t_final=t_fin,

@@ -110,7 +110,12 @@ _ATOL = 1e-15
 
 
 def check_restitution(e: float, name: str = "restitution", minimum: float = 0.0) -> float:
-    """Return ``float(e)`` or raise `ParameterError` unless ``minimum < e <= 1`` (and finite)."""
+    """Return ``float(e)`` or raise `ParameterError` unless ``minimum < e <= 1`` (and finite; not a JAX
+    tracer: `errors.TRACED`)."""
+    from .errors import TRACED, _traced
+
+    if _traced(e):
+        raise ParameterError(name, "a traced value", TRACED)
     try:
         ef = float(e)
     except (TypeError, ValueError):

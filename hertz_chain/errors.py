@@ -74,8 +74,20 @@ def check_parameter(ok: bool, name: str, value: object, allowed: str) -> None:
 
 # ------------------------------------------------------------------ the one home of plain-number checks
 # (quantities with units are parsed and range-checked by `hertz_chain.units`; these take plain SI numbers)
+def _traced(value: object) -> bool:
+    """Whether ``value`` is a JAX tracer (without importing JAX: the command line reads this module first)."""
+    return any(c.__name__ == "Tracer" for c in type(value).__mro__)
+
+
+TRACED = ("a concrete number: this builder reads configuration values; to differentiate with respect to a "
+          "contact parameter, construct the law class directly (e.g. hertz_chain.Hertz(k), Tsuji(k, eta, m_eff))")
+
+
 def check_number(value: object, name: str) -> float:
-    """``float(value)``, or :class:`ParameterError` naming ``name`` for a non-number or NaN."""
+    """``float(value)``, or :class:`ParameterError` naming ``name`` for a non-number or NaN (or a JAX
+    tracer: the builders that take plain numbers are not differentiable, `TRACED`)."""
+    if _traced(value):
+        raise ParameterError(name, "a traced value", TRACED)
     try:
         v = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):

@@ -127,6 +127,15 @@ __all__ = [
 
 
 # ==================================================================== entry points
+def _not_traced(fn: str, stack, state) -> None:
+    """`ParameterError` where `stack` or `state` holds a JAX tracer: `simulate` and `simulate_batch` run on
+    the host and return NumPy results, so they cannot be traced (`jax.jit`, `jax.grad`, `jax.vmap`)."""
+    if any(isinstance(a, jax.core.Tracer) for a in jax.tree.leaves((stack, state))):
+        raise ParameterError("stack/state", "a traced value", f"concrete arrays: {fn} runs on the host and returns "
+                             "NumPy results; under jax.jit/grad/vmap use launch_velocity (differentiable) or "
+                             "prepare_launch's function")
+
+
 def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, save_steps=True, until="cascade"):
     if until not in UNTIL:
         raise ParameterError("until", until, "'cascade' (stop when the first cascade ends), 'launch' (stop when "
@@ -138,6 +147,9 @@ def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, sa
         raise ParameterError("stack", type(stack).__name__, "a hertz_chain.Stack")
     if not isinstance(state, State):
         raise ParameterError("state", type(state).__name__, "a hertz_chain.State (at_impact, dropped, resting)")
+    if np.shape(state.positions) != np.shape(stack.masses) or np.shape(state.velocities) != np.shape(stack.masses):
+        raise ParameterError("state", f"positions {np.shape(state.positions)}, velocities {np.shape(state.velocities)}",
+                             f"positions and velocities of the masses' shape {np.shape(stack.masses)}")
     if until != "t_max" and (stack.wall or (not isinstance(stack.end_force, jax.core.Tracer) and stack.held)):
         raise ParameterError("until", until, "'t_max' (with a t_max) for a chain held by an end force or a wall: "
                              "it never flies apart, so no cascade ends")
@@ -237,9 +249,8 @@ def simulate(
     compiled solve is kept in JAX's compilation cache and the traced one too (`hertz_chain._export`, under
     equinox's `EQX_ON_ERROR=raise` or `nan`), so a new process skips both.
     """
+    _not_traced("simulate", stack, state)
     ts, t_max, cfg = _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, until=until)
-    if state.positions.shape != stack.masses.shape:
-        raise ParameterError("state", state.positions.shape, f"positions of shape {stack.masses.shape}")
     out = _solve(stack, state, ts, t_max, cfg)
     out["scales"] = Scales(**out["scales"])
     out = _post_history(out, stack, batched=False)
@@ -280,6 +291,40 @@ def _grow(a, size: int):
     pad = size - a.shape[0]
     xp = np if isinstance(a, np.ndarray) else jnp
     return xp.concatenate([a, xp.repeat(a[-1:], pad, axis=0)]) if pad > 0 else a
+
+
+def _invalid_designs(stacks: Stack, states: State) -> np.ndarray | None:
+    """`(B,)` the designs of a batch that cannot be solved: a mass not finite and > 0, or a non-finite
+    number anywhere in the stack or the state (values set past `Stack`'s checks, e.g. by `jax.vmap`ped
+    constructors or `eqx.tree_at`). None under a trace (nothing to read)."""
+    leaves = [a for a in jax.tree.leaves((stacks, states)) if eqx.is_array(a)]
+    if any(isinstance(a, jax.core.Tracer) for a in leaves):
+        return None
+    m = np.asarray(stacks.masses)
+    bad = ~np.all(np.isfinite(m) & (m > 0), axis=1)
+    B = m.shape[0]
+    for a in leaves:
+        a = np.asarray(a)
+        if a.ndim and a.shape[0] == B and np.issubdtype(a.dtype, np.inexact):
+            bad |= ~np.all(np.isfinite(a.reshape(B, -1)), axis=1)
+    return bad
+
+
+def _fail_designs(out: dict, invalid: np.ndarray) -> dict:
+    """`out` with the designs `invalid` (not solved: `_invalid_designs`) failed: status `failed`, no steps,
+    NaN results."""
+    def fail(key, a):
+        a = np.array(a)
+        if key == "status":
+            a[invalid] = int(Status.FAILED)
+        elif np.issubdtype(a.dtype, np.integer):
+            a[invalid] = 0
+        elif np.issubdtype(a.dtype, np.inexact):
+            a[invalid] = np.nan
+        return a
+
+    return {k: v if k == "scales" else (jax.tree.map(lambda a: fail(k, a), v) if isinstance(v, dict) else fail(k, v))
+            for k, v in out.items()}
 
 
 def _solve_designs(stacks, states, ts, t_max, cfg, ndev: int) -> dict:
@@ -339,6 +384,7 @@ def simulate_batch(
     if pulse_durations and save_steps:
         raise ParameterError("pulse_durations", True, "only with save_steps=False (with a step history, "
                              "analyse the design: its pulse metrics have the durations)")
+    _not_traced("simulate_batch", stacks, states)
     ts, t_max, cfg = _prepare(stacks, states, ts, t_max, solver, tolerances, max_steps, None, save_steps, until)
     if pulse_durations:
         cfg = dataclasses.replace(cfg, durations=True)
@@ -347,10 +393,19 @@ def simulate_batch(
         # for a single solve than diffrax's default (measured, Tsit5, 5 and 10 masses)
         cfg = eqx.tree_at(lambda c: c.solver.scan_kind, cfg, "bounded", is_leaf=lambda x: x is None)
     B = stacks.masses.shape[0] if stacks.masses.ndim == 2 else None
-    if B is None or states.positions.shape != stacks.masses.shape:
+    if B is None:
         raise ParameterError("stacks/states", (stacks.masses.shape, states.positions.shape),
                              "batched designs: masses and positions of shape (B, n)")
     t_max = jnp.broadcast_to(jnp.asarray(t_max, dtype=float), (B,))
+    given = (stacks, states)  # what the solution reports (`_invalid_designs` below may stand in for some)
+    invalid = _invalid_designs(stacks, states)
+    if invalid is not None and invalid.any() and not invalid.all():
+        # not solved (a zero or NaN mass held its piece to max_steps at t = 0): the first valid design
+        # runs in their place, and their results are set to `failed` with NaN below
+        ok = int(np.argmin(invalid))
+        stacks, states = jax.tree.map(
+            lambda a: np.where(invalid.reshape((B,) + (1,) * (np.ndim(a) - 1)), np.asarray(a)[ok], a)
+            if eqx.is_array(a) else a, (stacks, states))
     ndev = jax.local_device_count()
     piece = CPU_PIECE_PER_DEVICE * ndev if jax.default_backend() == "cpu" else B
     if B <= piece:
@@ -369,6 +424,8 @@ def simulate_batch(
         back = np.argsort(order)
         out = jax.tree.map(lambda *a: np.concatenate(a)[back], *outs)
     out = _post_history(out, stacks, batched=True)
+    if invalid is not None and invalid.any() and not invalid.all():
+        out = _fail_designs(out, invalid)
     np_ = lambda a: np.asarray(a)  # noqa: E731
     return BatchSolution(
         status_code=np_(out["status"]), t_final=np_(out["t_final"]),
@@ -380,7 +437,7 @@ def simulate_batch(
         steps=None if "steps" not in out else
         {k: np.where(np.isfinite(np_(v)), np_(v), np.nan) for k, v in out["steps"].items()},
         grid=None if "grid" not in out else {k: np_(v) for k, v in out["grid"].items()},
-        scales=out["scales"], stack=stacks, state=states,
+        scales=out["scales"], stack=given[0], state=given[1],
         peak_forces=np_(out["peak_forces"]) if "peak_forces" in out else None,
         impact_velocities=np_(out["impact_velocities"]) if "impact_velocities" in out else None,
         restitutions=np_(out["restitutions"]) if "restitutions" in out else None,
@@ -408,15 +465,45 @@ _NOT_ENDED = ("hertz_chain.launch_velocity: the cascade did not end (t_max or ma
 _LAST_ENDED = int(Status.COMPLETE_WITH_REBOUNDS)
 
 
-def _checked(v, status):
+def _checked(v, status, replay: bool = False):
     """`v`, or an error where the solve did not end: `SolverError` when called on arrays, a run-time
     error of the caller's compiled function under a trace (`eqx.error_if`). Kept out of `_launch_jit`:
-    a host callback would keep the compiled solve out of JAX's persistent compilation cache."""
+    a host callback would keep the compiled solve out of JAX's persistent compilation cache.
+
+    Under a trace the check is also on the derivative's path (`_guard_reverse`, `_guard_forward`): under
+    the caller's `jit`, `jax.grad` drops the primal value, and with it an `eqx.error_if` on it alone,
+    which left zero gradients of a failed solve. `replay`: the reverse-mode replay (`adjoint="reverse"`),
+    whose gradients raise; otherwise a failed solve's forward derivatives raise and its reverse-mode ones
+    (through a diffrax adjoint) are NaN wherever the result depends on the parameter."""
     if not isinstance(status, jax.core.Tracer):
         if np.asarray(status).max() > _LAST_ENDED:  # 2 us; np.any(... > Status.X) took 10 us per call
             raise SolverError(_NOT_ENDED)
         return v
-    return eqx.error_if(v, status > Status.COMPLETE_WITH_REBOUNDS, _NOT_ENDED)
+    bad = status > _LAST_ENDED
+    return _guard_reverse(v, bad) if replay else _guard_forward(v, bad)
+
+
+@jax.custom_vjp
+def _guard_reverse(v, bad):
+    """`v`, with a run-time error where `bad`, on the value and on its cotangent (reverse mode only)."""
+    return eqx.error_if(v, bad, _NOT_ENDED)
+
+
+_guard_reverse.defvjp(lambda v, bad: (_guard_reverse(v, bad), bad),
+                      lambda bad, ct: (eqx.error_if(ct, bad, _NOT_ENDED), None))
+
+
+@jax.custom_jvp
+def _guard_forward(v, bad):
+    """`v`, with a run-time error where `bad`, on the value and on its tangent; transposed (reverse mode
+    through a diffrax adjoint) the cotangent is NaN where `bad`."""
+    return eqx.error_if(v, bad, _NOT_ENDED)
+
+
+@_guard_forward.defjvp
+def _guard_forward_jvp(primals, tangents):
+    v, bad = primals
+    return _guard_forward(v, bad), eqx.error_if(tangents[0] * jnp.where(bad, jnp.nan, 1.0), bad, _NOT_ENDED)
 
 
 # `replay` is a Python bool: static. At the top level compiled with `_config.solve_compiler_options()` (JAX
@@ -469,7 +556,7 @@ def launch_velocity(
     """
     replay = isinstance(adjoint, str) and adjoint == "reverse"
     t_max, cfg = _launch_config(stack, state, solver, tolerances, t_max, max_steps, adjoint, until)
-    return _checked(*_launch_jit(stack, state, t_max, cfg, replay))
+    return _checked(*_launch_jit(stack, state, t_max, cfg, replay), replay)
 
 
 def _launch_config(stack, state, solver, tolerances, t_max, max_steps, adjoint, until):
@@ -531,6 +618,10 @@ def prepare_launch(
     prepared_for = _describe(stack)
 
     def launch(stack: Stack, state: State) -> Array:
+        if isinstance(stack, Stack) and isinstance(state, State) and (
+                np.shape(state.positions) != np.shape(stack.masses) or np.shape(state.velocities) != np.shape(stack.masses)):
+            raise ParameterError("state", f"positions {np.shape(state.positions)}, velocities {np.shape(state.velocities)}",
+                                 f"positions and velocities of the masses' shape {np.shape(stack.masses)}")
         lv, tree2 = jax.tree_util.tree_flatten((stack, state))
         arrays = [x for x, a in zip(lv, is_array) if a] if tree2 == tree else None
         if (arrays is None or [np.shape(x) for x in arrays] != shapes

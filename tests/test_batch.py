@@ -110,3 +110,23 @@ def test_cpu_pieces_take_the_designs_in_the_order_of_their_regime_number():
     assert base == pytest.approx(np.log(2e-3 / overlap + 1e-6), rel=1e-3)
     assert key(1e9, 2e-3) - base == pytest.approx(np.log(2.0), abs=1e-6)
     assert key(32e9, 1e-3) - base == pytest.approx(np.log(4.0), abs=1e-6)
+
+
+@pytest.mark.parametrize("save_steps", [False, True])
+def test_designs_past_the_checks_fail_without_being_solved(save_steps):
+    """Designs built with `jax.vmap` skip `Stack`'s checks: a negative, a zero and a NaN mass, and an
+    infinite gap, are flagged `failed` with NaN results and no steps (a zero mass used to hold its piece
+    to max_steps at t = 0), and the valid designs beside them are solved: two elastic masses at g = 0
+    give paper Eq 19, v_top / v = 2 (2 / (1 + r)) - 1, to 1e-8."""
+    law = HuntCrossley(1e9, 0.0)  # elastic
+    M = jnp.array([[1.0, 0.3], [1.0, -0.5], [1.0, 0.0], [1.0, jnp.nan], [1.0, 0.6], [1.0, 0.5]])
+    stacks = jax.vmap(lambda m: Stack(m, law, gravity=0.0))(M)
+    gaps = jnp.array([0.01, 0.01, 0.01, 0.01, 0.01, jnp.inf])
+    states = jax.vmap(lambda m, g: at_impact(Stack(jnp.array([1.0, 0.3]), law, gravity=0.0), 1.0, g))(M, gaps)
+    b = simulate_batch(stacks, states, tolerances=TIGHT, save_steps=save_steps)
+    assert b.status_code.tolist() == [0, 5, 5, 5, 0, 5]
+    bad = np.array([1, 2, 3, 5])
+    assert np.all(np.isnan(b.launch_velocities[bad])) and np.all(b.num_steps[bad] == 0)
+    for i, r in ((0, 0.3), (4, 0.6)):
+        assert b.launch_velocities[i, -1] == pytest.approx(2 * (2 / (1 + r)) - 1, rel=1e-8)
+    assert np.asarray(b.stack.masses)[1, 1] == -0.5  # the designs as given

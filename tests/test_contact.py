@@ -275,3 +275,16 @@ def test_make_law_rejects_bad_input(kwargs, param):
         make_law(name, **kwargs)
     assert info.value.name == param
     assert param in str(info.value)
+
+
+@pytest.mark.parametrize("name, kwargs, param", [
+    ("hertz", lambda v: dict(stiffness=v), "stiffness"),
+    ("tsuji", lambda v: dict(stiffness=1e9, restitution=v, effective_mass=0.3), "restitution"),
+])
+def test_make_law_under_a_trace_says_so(name, kwargs, param):
+    """`make_law` reads configuration values (floats, calibrations in SciPy): a traced value is refused
+    with one line that names the parameter and points at the law classes, not as "invalid: a number";
+    the class itself differentiates (Hertz's force k d^1.5: dF/dk = d^1.5)."""
+    with pytest.raises(ParameterError, match=rf"{param} = 'a traced value'.*construct the law class"):
+        jax.grad(lambda v: make_law(name, **kwargs(v)).force(jnp.asarray(1e-4), jnp.asarray(0.0)))(0.8)
+    assert jax.grad(lambda k: hc.Hertz(k).force(jnp.asarray(1e-4), jnp.asarray(0.0)))(1e9) == pytest.approx(1e-6, rel=1e-12)

@@ -1,6 +1,8 @@
 """Simulating stacks: closed forms, published values, invariants (batches, gradients and solvers have their own files)."""
 
 import jax
+import diffrax as dfx
+import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -12,7 +14,7 @@ from scipy.special import beta
 import hertz_chain as hc
 from hertz_chain.contact import Hertz, HuntCrossley, KelvinVoigt, Tsuji
 from hertz_chain.errors import ParameterError
-from hertz_chain.simulation import Tolerances, simulate, simulate_impact
+from hertz_chain.simulation import Tolerances, simulate, simulate_batch, simulate_impact
 from hertz_chain.stack import Stack, State, at_impact, resting
 from hertz_chain.status import Status
 
@@ -310,3 +312,68 @@ def test_launch_velocity_raises_where_the_cascade_does_not_end():
         np.asarray(jax.jit(launch)(stack, state))
     v = np.asarray(hc.launch_velocity(stack, state, tolerances=tol))
     assert v[-1] == pytest.approx(2 * (2 / (1 + 0.3)) - 1, rel=1e-8)
+
+
+def test_a_failed_solve_raises_through_the_callers_derivatives():
+    """Under the caller's `jit`, `jax.grad` drops the primal value: a check on it alone was removed with
+    it, and a failed solve (t_max of 1 us before a contact 10 ms away) gave zero gradients. Now: the
+    replayed reverse mode and forward mode raise; reverse mode through a diffrax adjoint gives NaN (a
+    NaN cotangent) wherever the result depends on the parameter. The same solve with the default `t_max` gives Eq 19's derivative:
+    d/dm2 [2 (2 / (1 + m2/m1)) - 1] = -4 / m1 / (1 + r)^2, to 1e-6."""
+    law, tol = Hertz(1e9), Tolerances(rtol=1e-11, atol=1e-11)
+    state = at_impact(Stack(jnp.asarray([1.0, 0.3]), law, gravity=0.0), 1.0, 0.01)
+
+    def top(adjoint, t_max=1e-6):
+        return lambda m: hc.launch_velocity(Stack(m, law, gravity=0.0), state, tolerances=tol, t_max=t_max,
+                                            adjoint=adjoint)[-1]
+
+    m = jnp.asarray([1.0, 0.3])
+    with pytest.raises(Exception, match="the cascade did not end"):
+        np.asarray(jax.jit(jax.grad(top("reverse")))(m))
+    with pytest.raises(Exception, match="the cascade did not end"):
+        np.asarray(jax.jit(jax.vmap(jax.grad(top("reverse"))))(jnp.stack([m, m])))
+    with pytest.raises(Exception, match="the cascade did not end"):
+        np.asarray(jax.jit(jax.jacfwd(top("forward")))(m))
+    # (before any contact the top's velocity depends on m1 only, through the scales: d/dm2 stays an exact 0)
+    g = np.asarray(jax.jit(jax.grad(top(dfx.RecursiveCheckpointAdjoint(), 1e-6)))(m))
+    assert np.isnan(g[0])
+    g = np.asarray(jax.jit(jax.grad(top("reverse", None)))(m))
+    assert g[1] == pytest.approx(-4.0 / (1.0 + 0.3) ** 2, rel=1e-6)
+
+
+def test_parameters_past_the_checks_fail_instead_of_returning_nan():
+    """A negative mass set past `Stack`'s checks (`eqx.tree_at`, or a traced value) gives a non-finite
+    launch velocity: the run is `failed` (not `complete` with NaN), and the launch functions raise."""
+    law = Hertz(1e9)
+    stack = Stack(jnp.asarray([1.0, 0.5, 0.25]), law)
+    state = at_impact(stack, 1.0, 0.01)
+    bad = eqx.tree_at(lambda s: s.masses, stack, jnp.asarray([1.0, -0.5, 0.25]))
+    assert hc.simulate(bad, state, throw=False).status == Status.FAILED
+    with pytest.raises(hc.SolverError, match="the cascade did not end"):
+        hc.launch_velocity(bad, state)
+    with pytest.raises(hc.SolverError, match="the cascade did not end"):
+        hc.prepare_launch(stack, state)(bad, state)
+
+
+def test_a_state_of_another_length_is_refused_by_every_entry_point():
+    """A two-mass state for a three-mass stack: one `ParameterError` naming `state` and both shapes, from
+    `simulate`, `launch_velocity`, `prepare_launch` and a prepared launch's call (not a raw broadcasting
+    error)."""
+    stack = Stack(jnp.asarray([1.0, 0.5, 0.25]), Hertz(1e9))
+    good, bad = at_impact(stack, 1.0, 0.01), State([0.0, 0.01], [-1.0, -1.0])
+    for call in (lambda: simulate(stack, bad), lambda: hc.launch_velocity(stack, bad),
+                 lambda: hc.prepare_launch(stack, bad), lambda: hc.prepare_launch(stack, good)(stack, bad)):
+        with pytest.raises(ParameterError, match=r"state = 'positions \(2,\), velocities \(2,\)'.*shape \(3,\)"):
+            call()
+
+
+def test_simulate_under_a_trace_says_what_to_use():
+    """`simulate` and `simulate_batch` return NumPy results on the host: under `jax.grad`/`jax.jit` they
+    refuse at once with one line that points at `launch_velocity` (not a JAX concretization error)."""
+    law = Hertz(1e9)
+    state = at_impact(Stack(jnp.asarray([1.0, 0.3]), law), 1.0)
+    with pytest.raises(ParameterError, match="stack/state = 'a traced value'.*use launch_velocity"):
+        jax.grad(lambda m: simulate(Stack(m, law), state).gain)(jnp.asarray([1.0, 0.3]))
+    with pytest.raises(ParameterError, match="simulate_batch runs on the host"):
+        jax.jit(lambda m: simulate_batch(jax.vmap(lambda mm: Stack(mm, law))(m), jax.vmap(lambda _: state)(m)).status_code)(
+            jnp.ones((2, 2)))
