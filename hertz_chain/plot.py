@@ -146,9 +146,13 @@ def plot_sweep(store: str | Path, path: str | Path, *, x: str, y: str | None = N
     for flag, name in (("--x", x), ("--y", y)):
         if name is not None and name not in allowed:
             raise ParameterError(flag, name, f"one of {', '.join(allowed)}")
-    da = ds[var].where(ds["status"] <= 1) if var != "status" else ds[var]
+    if y is not None and y == x:
+        raise ParameterError("--y", y, f"another key than --x (one of {', '.join(a for a in allowed if a != x)})")
+    # designs that completed (status 0 or 1; -1: not run yet, in a store still being written)
+    da = ds[var].where((ds["status"] >= 0) & (ds["status"] <= 1)) if var != "status" else ds[var]
     if not np.any(np.isfinite(np.asarray(da, dtype=float))):
-        why = (" (the store was written without [sweep] durations = true)" if var == "top_duration_10" else
+        why = (" (the store was written without [sweep] durations = true)"
+               if var in ("top_duration_10", "top_rise_time") else
                " for any completed design")
         raise ParameterError("--var", var, f"a variable with values: {var} has none{why}")
     fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)

@@ -490,7 +490,16 @@ def _event_driven_gains(masses, states, stacks, e_rig, have, ground: bool, speed
 
 # ------------------------------------------------------------------------------------------ the store
 def _fingerprint(text: str) -> str:
-    return hashlib.sha256(text.encode()).hexdigest()
+    """The sweep's identity: a hash of the parsed stack file (its keys and values; comments, blank lines and
+    the order of tables do not change it). A store made before 2026-11-28 holds the hash of the raw text,
+    which `_check_store` accepts too."""
+    import tomllib
+
+    try:
+        canonical = json.dumps(tomllib.loads(text), sort_keys=True, default=str)
+    except tomllib.TOMLDecodeError:
+        canonical = text
+    return hashlib.sha256(canonical.encode()).hexdigest()
 
 
 def _create_store(path: Path, plan: _Plan, text: str, source: str | None) -> None:
@@ -539,8 +548,11 @@ def _create_store(path: Path, plan: _Plan, text: str, source: str | None) -> Non
         "history": f"{datetime.datetime.now(datetime.timezone.utc).isoformat()} hertz-chain sweep {source or ''}",
         "stack_file": text, "stack_file_sha256": _fingerprint(text), "versions": json.dumps(versions),
         "chunk_rows": plan.chunk_rows, "n_chunks": plan.n_chunks})
-    ds.to_zarr(path, mode="w-", compute=False, consolidated=False,
-               encoding={"chunk_done": {"chunks": (1,), "compressors": None, "fill_value": 0}})
+    # fill values: what a design not computed yet reads (-1 for the integers, NaN for the floats; Zarr's
+    # default 0 read as status "complete" and regime "independent" in a store still being written)
+    encoding = {name: {"fill_value": -1} for name, v in data.items() if v.dtype.kind == "i" and name != "chunk_done"}
+    encoding["chunk_done"] = {"chunks": (1,), "compressors": None, "fill_value": 0}
+    ds.to_zarr(path, mode="w-", compute=False, consolidated=False, encoding=encoding)
 
 
 #: CF / UDUNITS spellings of the stack files' SI units
@@ -580,7 +592,7 @@ def _write_chunk(path: Path, plan: _Plan, c: int, res: dict) -> None:
 def _fault(where: str, c: int) -> None:
     """Fault injection for the kill tests: `HERTZ_CHAIN_SWEEP_FAULT="after-data:3"` kills this process
     (SIGKILL) after chunk 3's results are written and before its marker; `"mid-data:3"` halfway through
-    writing them."""
+    writing them; `"creating:0"` when the new store is laid out and not yet renamed to its name."""
     want = os.environ.get("HERTZ_CHAIN_SWEEP_FAULT", "")
     if want == f"{where}:{c}":
         import signal
@@ -641,18 +653,36 @@ def check(path: str | Path, output: str | Path) -> tuple[_Plan, str]:
     out = Path(output)
     if out.suffix != ".zarr":
         raise OutputPathError("--output", out, "a sweep store is a folder ending in .zarr")
-    if out.exists():
-        if not (out / "chunk_done").is_dir():
-            raise OutputPathError("--output", out, "exists and is not a hertz_chain sweep store; choose a new name")
+    try:
+        exists = out.exists()
+    except OSError:  # a name too long for the file system: `check_output_path` says so
+        exists = False
+    if exists:
+        _check_store(out, text)
+    else:  # the folder exists and is writable, the name fits (the store is made beside it, then renamed)
+        from ._paths import check_output_path
+
+        check_output_path(out, "--output", (".zarr",), force=False)
+    return plan, text
+
+
+def _check_store(out: Path, text: str) -> None:
+    """`OutputPathError` unless `out` is a whole sweep store of this stack file (`_fingerprint`)."""
+    from .errors import OutputPathError
+
+    attrs = {}
+    if (out / "chunk_done").is_dir():
         import zarr
 
-        attrs = dict(zarr.open_group(str(out), mode="r").attrs)
-        if attrs.get("stack_file_sha256") != _fingerprint(text):
-            raise OutputPathError("--output", out, "written by a different stack file or sweep spec; resume it "
-                                  "with the same file, or choose a new name")
-    elif not out.parent.is_dir():
-        raise OutputPathError("--output", out, f"the folder {out.parent} does not exist")
-    return plan, text
+        try:
+            attrs = dict(zarr.open_group(str(out), mode="r").attrs)
+        except Exception:  # noqa: BLE001  (any unreadable layout: not a store of ours)
+            attrs = {}
+    if attrs.get("title") != "hertz_chain sweep" or not all((out / v).is_dir() for v in ("status", "regime")):
+        raise OutputPathError("--output", out, "exists and is not a hertz_chain sweep store; choose a new name")
+    if attrs.get("stack_file_sha256") not in (_fingerprint(text), hashlib.sha256(text.encode()).hexdigest()):
+        raise OutputPathError("--output", out, "written by a different stack file or sweep spec; resume it "
+                              "with the same file, or choose a new name")
 
 
 # ------------------------------------------------------------------------------------------ time estimates
@@ -724,11 +754,87 @@ def sweep(path: str | Path, output: str | Path, *, workers: int | None = None, s
     **Returns** a `SweepResult`. An existing store of the same sweep is resumed: only chunks without a
     marker run. **Raises** `StackFileError`/`OutputPathError` before anything runs.
     """
+    from .errors import ParameterError
+
     t0 = time.perf_counter()
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, (int, np.integer))
+                                or not 1 <= workers <= 1024):
+        raise ParameterError("workers", workers, "a number of worker processes from 1 to 1024 (or None: this process)")
+    if workers is not None and scheduler is not None:
+        raise ParameterError("workers", workers, "None with a scheduler: give workers or scheduler, not both")
+    if scheduler is not None and (not isinstance(scheduler, str) or "://" not in scheduler):
+        raise ParameterError("scheduler", scheduler, "a Dask scheduler address such as tcp://host:8786")
     path, output = Path(path), Path(output)
     plan, text = check(path, output)
+    client = _dask_client(workers, scheduler) if workers is not None or scheduler is not None else None
+    try:
+        return _sweep(path, output, plan, text, client, workers, scheduler, progress, on_chunk, t0)
+    finally:
+        if client is not None:
+            cluster = client.cluster if workers is not None else None
+            client.close()
+            if cluster is not None:
+                cluster.close()
+
+
+#: how long `sweep` waits for a Dask scheduler to answer before refusing its address
+SCHEDULER_TIMEOUT = "10s"
+
+
+def _dask_client(workers, scheduler):
+    """A Dask client: of a new local cluster of `workers` single-device processes, or connected to the
+    scheduler at `scheduler` (`ParameterError` naming it where none answers; before any store is made)."""
+    from distributed import Client, LocalCluster
+
+    from .errors import ParameterError
+
+    if scheduler is not None:
+        try:
+            return Client(scheduler, timeout=SCHEDULER_TIMEOUT)
+        except (OSError, TimeoutError) as exc:
+            raise ParameterError("scheduler", scheduler, f"a running Dask scheduler's address (none answered: "
+                                 f"{str(exc).splitlines()[0][:120]})") from None
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                           env={"HERTZ_CHAIN_CPU_DEVICES": "1"})
+    return Client(cluster)
+
+
+def _make_store(output: Path, plan: _Plan, text: str, source: str) -> None:
+    """Create the store whole or not at all: laid out in a hidden folder beside `output`, then renamed
+    to it (a kill while it is made leaves no half store under the user's name; the hidden folders of runs
+    no longer alive are removed). Where another run made `output` first, its store is used if it is a
+    store of this sweep (`_check_store`)."""
+    import shutil
+
+    prefix = f".{output.name}.creating-"
+    for old in output.parent.glob(prefix + "*"):
+        try:
+            os.kill(int(old.name[len(prefix):].split("-")[0]), 0)
+        except ProcessLookupError:
+            shutil.rmtree(old, ignore_errors=True)
+        except (ValueError, OSError):
+            pass
+    tmp = output.with_name(f"{prefix}{os.getpid()}-{os.urandom(4).hex()}")
+    try:
+        _create_store(tmp, plan, text, source)
+        _fault("creating", 0)
+        try:
+            os.rename(tmp, output)
+        except OSError:
+            if not output.exists():
+                raise
+            _check_store(output, text)  # made by another run meanwhile
+    except OSError as exc:
+        from .errors import OutputPathError
+
+        raise OutputPathError("--output", output, f"cannot create the store ({exc.strerror or exc})") from None
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _sweep(path, output, plan, text, client, workers, scheduler, progress, on_chunk, t0) -> SweepResult:
     if not output.exists():
-        _create_store(output, plan, text, str(path))
+        _make_store(output, plan, text, str(path))
     done = _done(output)
     todo = [c for c in range(plan.n_chunks) if c not in done]
     counts: dict[int, int] = {}
@@ -752,11 +858,11 @@ def sweep(path: str | Path, output: str | Path, *, workers: int | None = None, s
             bar[0].advance(bar[1], plan.region(c).stop * plan.row - plan.region(c).start * plan.row)
 
     try:
-        if workers is None and scheduler is None:
+        if client is None:
             for c in todo:
                 finish(c, _evaluate(text, str(path), c))
         else:
-            _run_dask(text, str(path), todo, finish, workers, scheduler)
+            _run_dask(text, str(path), todo, finish, client)
     finally:
         if bar is not None:
             bar[0].stop()
@@ -802,20 +908,9 @@ def _progress(enabled: bool, plan: _Plan, chunks: int):
     return bar, task
 
 
-def _run_dask(text, source, todo, finish, workers, scheduler) -> None:
-    from distributed import Client, LocalCluster, as_completed
+def _run_dask(text, source, todo, finish, client) -> None:
+    from distributed import as_completed
 
-    if scheduler is not None:
-        client, cluster = Client(scheduler), None
-    else:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                               env={"HERTZ_CHAIN_CPU_DEVICES": "1"})
-        client = Client(cluster)
-    try:
-        futures = {client.submit(_evaluate, text, source, c, pure=False): c for c in todo}
-        for fut in as_completed(futures):
-            finish(futures[fut], fut.result())
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+    futures = {client.submit(_evaluate, text, source, c, pure=False): c for c in todo}
+    for fut in as_completed(futures):
+        finish(futures[fut], fut.result())

@@ -117,9 +117,20 @@ def test_a_sweep_killed_mid_write_and_before_its_marker_resumes_to_the_same_stor
     ref = tmp_path / "ref.zarr"
     sweep(path, ref)
     out = tmp_path / "killed.zarr"
+    run = _cli_sweep(path, out, "creating:0")  # killed while the store is laid out: no store under its name
+    assert run.returncode == -signal.SIGKILL, run.stderr
+    assert not out.exists() and len(list(tmp_path.glob(".killed.zarr.creating-*"))) == 1
     for fault in ("mid-data:1", "after-data:2"):
         run = _cli_sweep(path, out, fault)
         assert run.returncode == -signal.SIGKILL, run.stderr
+        if fault == "mid-data:1":  # the left-over layout of the dead run is gone
+            assert not list(tmp_path.glob(".killed.zarr.creating-*"))
+            # chunk 2 (the gaps' third value) is not run yet: status, regime and steps read -1 (not 0, which
+            # read as "complete" and "independent"), the floats NaN
+            part = _open(out)
+            for name in ("status", "regime", "num_steps"):
+                assert np.all(part[name].values[2] == -1), name
+            assert np.all(np.isnan(part["top_velocity_gain"].values[2]))
     resumed = sweep(path, out)  # the same sweep again (in this process: its solve is compiled already)
     assert (resumed.computed, resumed.skipped) == (1, 2)  # chunk 2 was recomputed, never 0 or 1 again
     a, b = _open(ref), _open(out)
@@ -398,3 +409,38 @@ def test_time_estimate_before_the_run_from_the_last_sweep_of_the_same_structure(
     other.write_text(tomli_w.dumps(BASE | {"stack": BASE["stack"] | {"masses": [1.0, 0.5, 0.3, 0.1]},
                                            "sweep": GRID}), encoding="utf-8")
     assert recorded_rate(check(other, tmp_path / "c.zarr")[0]) is None
+
+
+def test_arguments_and_outputs_are_refused_before_any_store(tmp_path, capsys, monkeypatch):
+    """One line naming the argument, before anything is made: `workers` outside 1..1024 in Python (0 used
+    to hang), a scheduler that does not answer (it used to leave an empty store and a traceback), an output
+    folder that is missing or not writable, a name longer than the file system allows; `plot` with the same
+    key for --x and --y. A comment added to the stack file resumes its store (the store's identity is the
+    parsed file)."""
+    import hertz_chain.sweeps as sweeps
+    from hertz_chain.errors import OutputPathError, ParameterError
+
+    path = _file(tmp_path, GRID)
+    for bad in (0, -1, 2.5, True):
+        with pytest.raises(ParameterError, match="workers"):
+            sweep(path, tmp_path / "w.zarr", workers=bad)
+    monkeypatch.setattr(sweeps, "SCHEDULER_TIMEOUT", "1s")
+    with pytest.raises(ParameterError, match="scheduler = 'tcp://127.0.0.1:1'.*none answered"):
+        sweep(path, tmp_path / "s.zarr", scheduler="tcp://127.0.0.1:1")
+    assert not (tmp_path / "w.zarr").exists() and not (tmp_path / "s.zarr").exists()
+    locked = tmp_path / "locked"
+    locked.mkdir(mode=0o500)
+    targets = [(tmp_path / "no" / "o.zarr", "does not exist"), (tmp_path / ("x" * 300 + ".zarr"), "bytes")]
+    if not os.access(locked, os.W_OK):  # (root writes anywhere)
+        targets.append((locked / "o.zarr", "not writable"))
+    for target, word in targets:
+        with pytest.raises(OutputPathError, match=word):
+            sweep(path, target)
+    out = sweep(path, tmp_path / "o.zarr").path
+    path.write_text("# a note\n" + path.read_text(), encoding="utf-8")
+    again = sweep(path, out)
+    assert (again.computed, again.skipped) == (0, 3)
+    with pytest.raises(SystemExit) as exc:
+        main(["plot", str(out), "--x", "stack.gaps", "--y", "stack.gaps", "--output", str(tmp_path / "p.png")])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and err.startswith("hertz-chain: error: --y") and err.count("\n") == 1
