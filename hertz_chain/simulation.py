@@ -261,12 +261,53 @@ def simulate(
     return sol
 
 
-#: On a CPU, `simulate_batch` solves its designs in pieces of this many per device, one after the other:
-#: a vmapped loop runs until its slowest design ends and works on all of them every step, so smaller
-#: pieces waste less on the designs that ended, and their arrays stay in the caches; 256 per call on 2
-#: cores were fastest (2,048 five-mass sweep designs: 1.71 s against 2.07 s in one call, gapped; 1.11
-#: against 1.19 s, touching; 64 per call slower again). A GPU takes the batch whole.
-CPU_PIECE_PER_DEVICE = 128
+#: On a CPU, `simulate_batch` solves more designs than this in pieces of this many, each piece one vmapped
+#: solve on one device (`_solve_pieces`): a vmapped loop runs until its slowest design ends and works on
+#: all of them every step, so smaller pieces waste less on the designs that ended, and their arrays stay
+#: in the caches (measured 2026-11-25 on 2 cores: 128 per device fastest; 2,048 five-mass sweep designs
+#: 1.71 s against 2.07 s in one call, gapped; 64 slower again). A GPU takes the batch whole.
+CPU_PIECE = 128
+
+
+def _solve_pieces(stacks, states, ts, t_max, cfg, devices) -> dict:
+    """The designs in pieces of `CPU_PIECE` (all but a lone piece of fewer padded by repeating their last
+    design), taken in the order of their regime number (`_regime_numbers`: designs whose cascades take
+    alike many steps share a piece, so fewer lanes wait for a piece's slowest design), each piece one
+    vmapped solve on one device, with a thread per device taking the next piece as it finishes (the solve
+    releases Python's lock). A design's piece and companions do not depend on the number of devices, so
+    neither do the results (a sweep's Dask workers, one device each, give a local run's numbers). The
+    slicing is on the host, in NumPy (JAX would dispatch one operation per array and piece: ~3 % of a
+    sweep's time). Returns the outputs as NumPy arrays, in the order given."""
+    import concurrent.futures
+    import threading
+
+    B = t_max.shape[0]
+    size = CPU_PIECE if B > CPU_PIECE else B
+    order = np.argsort(np.asarray(_regime_numbers(stacks, states)), kind="stable") if B > size else np.arange(B)
+    sorted_ = jax.tree.map(lambda a: np.asarray(a)[order] if eqx.is_array(a) else a, (stacks, states, t_max))
+    starts = list(range(0, B, size))
+    todo, lock = iter(starts), threading.Lock()
+    outs = {}
+
+    def work(device):
+        while True:
+            with lock:
+                i = next(todo, None)
+            if i is None:
+                return
+            part = jax.tree.map(lambda a: _grow(a[i : i + size], size) if eqx.is_array(a) else a, sorted_)
+            part = jax.device_put(part, device)
+            outs[i] = jax.tree.map(lambda a: np.asarray(a)[: min(size, B - i)], _solve_batch(*part[:2], ts, part[2], cfg))
+
+    devices = devices[: len(starts)]
+    if len(devices) == 1:
+        work(devices[0])
+    else:
+        with concurrent.futures.ThreadPoolExecutor(len(devices)) as pool:
+            for f in [pool.submit(work, d) for d in devices]:
+                f.result()
+    back = np.argsort(order)
+    return jax.tree.map(lambda *a: np.concatenate(a)[back], *[outs[i] for i in starts])
 
 
 @eqx.filter_jit
@@ -350,6 +391,7 @@ def simulate_batch(
     save_steps: bool = True,
     until: str = "cascade",
     pulse_durations: bool = False,
+    _pieces: bool = False,
 ) -> BatchSolution:
     """Simulate a batch of designs of one structure in one compiled, vmapped solve.
 
@@ -364,15 +406,18 @@ def simulate_batch(
     step updates the `max_steps`-long buffers of every design by a select, so the cost per step grows
     with `max_steps`: keep `max_steps` near what the designs need (default 4096; a design that needs more
     is flagged "incomplete: max_steps reached"). With several JAX devices (every CPU core is one:
-    module docstring, "Batches") the designs are split over them; on a CPU, they are solved in pieces of
-    `CPU_PIECE_PER_DEVICE` per device, one after the other, taken in the order of the designs' regime
-    number (`_regime_numbers`: designs whose cascades take alike many steps share a piece, so fewer
-    lanes wait for a piece's slowest design). Results come back in the order given; a design's
-    solution depends on its companions in a piece only by rounding (vectorised kernels round
-    differently, and adaptive steps carry that to the tolerance: the top mass's launch velocity within
-    ~1e-8 relative, a near-resting bottom mass's launch, whose release from the ground is
-    ill-conditioned, up to ~3 %). `until` as for `simulate`. Costs per design are measured in
-    `benchmarks/` (`make bench`).
+    module docstring, "Batches") the designs are split over them. On a CPU, more than `CPU_PIECE`
+    designs are solved in pieces of `CPU_PIECE`, taken in the order of the designs' regime number
+    (`_regime_numbers`: designs whose cascades take alike many steps share a piece, so fewer lanes wait
+    for a piece's slowest design), each piece on one device, every device taking the next piece as it
+    finishes; which designs share a piece does not depend on the number of devices, so neither do the
+    results. Results come back in the order given; a design's solution depends on its companions in a
+    piece only by rounding (vectorised kernels round differently, and adaptive steps carry that to the
+    tolerance: the top mass's launch velocity within ~1e-8 relative, a near-resting bottom mass's launch,
+    whose release from the ground is ill-conditioned, up to ~3 %). `until` as for `simulate`. Costs per
+    design are measured in `benchmarks/` (`make bench`). Designs whose numbers no stack may have (a mass
+    not finite and > 0, a non-finite value; set past `Stack`'s checks, e.g. by `jax.vmap`) are not solved
+    and come back `failed` with NaN results.
 
     `pulse_durations=True` (with `save_steps=False`) also streams the top mass's pulse through the solve
     for its 10 % duration and 10-90 % rise time (`BatchSolution.top_duration_10`, `top_rise_time`): up
@@ -380,6 +425,10 @@ def simulate_batch(
     accept/reject select, so it costs about 20 % per step (measured: five-mass Tsuji designs,
     `benchmarks/sweep.md`). Raises `ParameterError`
     with `save_steps=True` (analyse a design's history instead).
+
+    `_pieces` (internal, `hertz_chain.sweeps`): on a CPU, a batch of up to `CPU_PIECE` designs is one
+    piece on one device too (otherwise it is split over the devices), so that a chunk's results do not
+    depend on the number of devices either.
     """
     if pulse_durations and save_steps:
         raise ParameterError("pulse_durations", True, "only with save_steps=False (with a step history, "
@@ -407,22 +456,12 @@ def simulate_batch(
             lambda a: np.where(invalid.reshape((B,) + (1,) * (np.ndim(a) - 1)), np.asarray(a)[ok], a)
             if eqx.is_array(a) else a, (stacks, states))
     ndev = jax.local_device_count()
-    piece = CPU_PIECE_PER_DEVICE * ndev if jax.default_backend() == "cpu" else B
-    if B <= piece:
-        out = _solve_designs(stacks, states, ts, t_max, cfg, ndev)
-    else:  # pieces of one shape, one after the other (the last padded by repeating its last design), the
-        # designs taken in the order of their regime number so that a piece's designs end together
-        # (the slicing on the host, in NumPy: JAX would dispatch one operation per array and piece, ~3 %
-        # of a sweep's time)
-        order = np.argsort(np.asarray(_regime_numbers(stacks, states)), kind="stable")
-        sorted_ = jax.tree.map(lambda a: np.asarray(a)[order] if eqx.is_array(a) else a, (stacks, states, t_max))
-        outs = []
-        for i in range(0, B, piece):
-            part = jax.tree.map(lambda a: _grow(a[i : i + piece], piece) if eqx.is_array(a) else a, sorted_)
-            outs.append(jax.tree.map(lambda a: np.asarray(a)[: min(piece, B - i)],
-                                     _solve_designs(*part[:2], ts, part[2], cfg, ndev)))
-        back = np.argsort(order)
-        out = jax.tree.map(lambda *a: np.concatenate(a)[back], *outs)
+    if jax.default_backend() == "cpu" and (B > CPU_PIECE or (_pieces and B > 1)):
+        out = _solve_pieces(stacks, states, ts, t_max, cfg, jax.local_devices())
+    else:  # one vmapped solve, split over the devices (not an implicit solver's: its linear solves fail
+        # under `jax.shard_map`)
+        out = _solve_designs(stacks, states, ts, t_max, cfg,
+                             1 if isinstance(cfg.solver, dfx.AbstractImplicitSolver) else ndev)
     out = _post_history(out, stacks, batched=True)
     if invalid is not None and invalid.any() and not invalid.all():
         out = _fail_designs(out, invalid)

@@ -400,7 +400,7 @@ def _evaluate(text: str, source: str | None, c: int) -> dict:
     stacks, states = designs(X)
     opts = {k: v for k, v in dm.built.simulate_options.items() if k in ("solver", "tolerances", "t_max", "until")}
     sol = simulate_batch(stacks, states, save_steps=False, max_steps=dm.built.simulate_options.get("max_steps", 16_384),
-                         pulse_durations=plan.sweep.durations, **opts)
+                         pulse_durations=plan.sweep.durations, _pieces=True, **opts)
     fields = fields_of(X)
     speed = np.asarray(fields["drop.impact_velocity"]) if not dm.chain else \
         np.full(len(X), dm.drop_speed(None))

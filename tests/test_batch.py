@@ -56,18 +56,18 @@ def test_batch_equals_individual_and_isolates_failure():
         simulate_batch(stack_designs(stacks), jax.tree.map(lambda *x: jnp.stack(x), *states), pulse_durations=True)
 
 
-@pytest.mark.parametrize("piece", [None, 1])
+@pytest.mark.parametrize("piece", [None, 2])
 def test_batch_split_over_devices_equals_individual(piece, monkeypatch):
     # Reference: individual solves. Five designs over the two CPU devices of conftest (shard_map, the
     # last design repeated once to fill the second device, then dropped), with and without history; and
-    # without it in pieces of two designs one after the other (`CPU_PIECE_PER_DEVICE` = 1: 2 + 2 + 1, the
-    # last padded), as a large batch on a CPU runs.
+    # without it in pieces of two designs (`CPU_PIECE` = 2: 2 + 2 + 1, the last padded), one device
+    # thread taking the next piece as it finishes, as a large batch on a CPU runs.
     from hertz_chain import simulation
 
     if jax.default_backend() != "cpu":
         pytest.skip("conftest's two CPU devices: the CPU backend only (an accelerator is one device here)")
     if piece is not None:
-        monkeypatch.setattr(simulation, "CPU_PIECE_PER_DEVICE", piece)
+        monkeypatch.setattr(simulation, "CPU_PIECE", piece)
     assert jax.local_device_count() == 2
     ratios = [0.3, 0.4, 0.5, 0.6, 0.7]
     stacks = [Stack(r ** np.arange(3), HuntCrossley(1e9, 0.05), gravity=G) for r in ratios]
@@ -130,3 +130,48 @@ def test_designs_past_the_checks_fail_without_being_solved(save_steps):
     for i, r in ((0, 0.3), (4, 0.6)):
         assert b.launch_velocities[i, -1] == pytest.approx(2 * (2 / (1 + r)) - 1, rel=1e-8)
     assert np.asarray(b.stack.masses)[1, 1] == -0.5  # the designs as given
+
+
+def test_cpu_pieces_give_the_same_numbers_on_any_number_of_devices(monkeypatch):
+    """A design's piece and companions do not depend on the devices (`simulation._solve_pieces`): the same
+    seven designs in pieces of three on one device and on two give bit-for-bit equal results (a sweep's
+    Dask workers have one device each, a local run every core). Both against the designs' own solves
+    (the top launch velocity to 1e-8)."""
+    from hertz_chain import simulation
+
+    if jax.default_backend() != "cpu" or jax.local_device_count() < 2:
+        pytest.skip("conftest's two CPU devices")
+    monkeypatch.setattr(simulation, "CPU_PIECE", 3)
+    ratios = [0.3, 0.35, 0.4, 0.5, 0.55, 0.6, 0.7]
+    stacks = [Stack(r ** np.arange(3), HuntCrossley(1e9, 0.05), gravity=G) for r in ratios]
+    states = [at_impact(s, 1.0, 1e-4 * (1 + i)) for i, s in enumerate(stacks)]
+    bs, xs = stack_designs(stacks), jax.tree.map(lambda *x: jnp.stack(x), *states)
+    ts, t_max, cfg = simulation._prepare(bs, xs, None, None, "tsit5", TIGHT, 2000, None, False, "cascade")
+    t_max = jnp.full(7, jnp.nan)
+    one = simulation._solve_pieces(bs, xs, ts, t_max, cfg, jax.local_devices()[:1])
+    two = simulation._solve_pieces(bs, xs, ts, t_max, cfg, jax.local_devices())
+    for k in ("launch_velocities", "num_steps", "energy_error", "peak_forces", "restitutions"):
+        np.testing.assert_array_equal(one[k], two[k], err_msg=k)
+    for i in range(7):
+        ref = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=2000)
+        assert one["launch_velocities"][i, -1] == pytest.approx(ref.launch_velocities[-1], rel=1e-8)
+
+
+def test_an_implicit_solver_solves_batches(monkeypatch):
+    """Kvaerno5's linear solves failed under `jax.shard_map` (a batch of 4 or more on two devices raised
+    "pytree does not match out_structure"): a batch of 4 solves on one device, and in pieces of 3
+    (`CPU_PIECE`) on both, each design as its own solve gives it (the top launch velocity to 1e-7)."""
+    from hertz_chain import simulation
+
+    ratios = np.linspace(0.3, 0.7, 4)
+    stacks = [Stack(r ** np.arange(3), HuntCrossley(1e9, 0.05), gravity=G) for r in ratios]
+    states = [at_impact(s, 1.0, 1e-4) for s in stacks]
+    args = (stack_designs(stacks), jax.tree.map(lambda *x: jnp.stack(x), *states))
+    whole = simulate_batch(*args, solver="kvaerno5", save_steps=False)
+    monkeypatch.setattr(simulation, "CPU_PIECE", 3)
+    pieces = simulate_batch(*args, solver="kvaerno5", save_steps=False)
+    assert whole.ok.all() and pieces.ok.all()
+    for i in (0, 3):
+        ref = simulate(stacks[i], states[i], solver="kvaerno5")
+        for b in (whole, pieces):
+            assert b.launch_velocities[i, -1] == pytest.approx(ref.launch_velocities[-1], rel=1e-7)
