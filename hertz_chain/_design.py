@@ -137,6 +137,9 @@ class DesignMap:
         self.section = section
         for s in self.slots:
             self._check(s)
+        if {"drop.height", "drop.impact_velocity"} <= {s.key for s in self.slots}:
+            raise StackFileError(f"{self.section}: drop.height and drop.impact_velocity both set the drop speed; "
+                                 "vary one of them")
         self._d = {j: _LAW_CLASSES[cs.law].dimensionless_damping(cs.restitution, chi_map=cs.chi_map or "exact",
                                                                  clamp=cs.clamp)
                    for j, cs in self.contacts.items() if not LAWS[cs.law].elastic and cs.restitution is not None}

@@ -45,7 +45,7 @@ import numpy as np
 
 from .constants import G0
 from .errors import ParameterError, StackFileError
-from .keys import KEYS, Slot, dimension, read_bounds, read_entry, resolve
+from .keys import KEYS, Slot, quantity_of, read_bounds, read_entry, resolve
 
 __all__ = ["FIT_KEYS", "FitParameter", "FitResult", "parse_vary_option", "read_fit_file", "fit"]
 
@@ -189,7 +189,8 @@ def _parse_fit(raw: Any, spec) -> tuple[list[_Vary], int]:
         resolve(key, None, n=3, ground=True, where=f"{where}.key")
         bounds = None
         if "bounds" in item:
-            bounds = read_bounds(item["bounds"], dimension(spec, key, item.get("index")), f"{where}.bounds")
+            dim, p = quantity_of(spec, key, item.get("index"), where)
+            bounds = read_bounds(item["bounds"], dim, f"{where}.bounds", p)
         elif key not in DEFAULT_BOUNDS:
             raise StackFileError(f"{where}.bounds: missing; {key} has no default bounds (give [lower, upper] "
                                  "with units)")

@@ -137,28 +137,54 @@ def read_entry(item: object, where: str, allowed: tuple[str, ...], example: str)
     return item
 
 
-def dimension(spec, key: str, index: object) -> str:
-    """The `stackfile` dimension of `key` in the file `spec`: a stiffness is N/m^1.5 or N/m by the law
-    of the (first) interface named."""
+def dimension(spec, key: str, index: object, where: str = "key") -> str:
+    """The `stackfile` dimension of `key` in the file `spec` (`quantity_of`)."""
+    return quantity_of(spec, key, index, where)[0]
+
+
+def quantity_of(spec, key: str, index: object, where: str = "key") -> tuple[str, float | None]:
+    """The `stackfile` dimension of `key` in the file `spec` and, for a power law's stiffness (N/m^p), its
+    exponent p (else None). A stiffness is N/m^1.5, N/m or N/m^p by the law of the interfaces named,
+    which must agree. **Raises** `StackFileError` (one line, at `where`) for interfaces whose laws take
+    the stiffness in different units (give `index` naming interfaces of one)."""
     from .registry import LAWS
 
     dim = KEYS[key].dimension
     if dim != "stiffness":
-        return dim
-    idx = index if isinstance(index, list) else [index]
-    j = next((i for i in idx if isinstance(i, int) and not isinstance(i, bool)), 1)
-    return LAWS[spec.contact_for(j).law].stiffness
+        return dim, None
+    if spec.n is None:  # the number of masses is left open (`optimize.n`): the first interface named
+        idx = index if isinstance(index, list) else [index]
+        interfaces = [next((i for i in idx if isinstance(i, int) and not isinstance(i, bool)), 1)]
+    else:
+        interfaces = [slot.index for slot in resolve(key, index, n=spec.n, ground=spec.has_ground, where=where)]
+    kinds: dict = {}
+    for j in interfaces:
+        contact = spec.contact_for(j)
+        unit = LAWS[contact.law].stiffness
+        p = dict(contact.params).get("exponent") if unit == "power_stiffness" else None
+        kinds.setdefault((unit, p), []).append(f"{contact.law} at {j}")
+    if len(kinds) > 1:
+        shown = "; ".join(f"{_STIFFNESS_UNIT.get(u, u).replace('p', f'{p:g}') if p else _STIFFNESS_UNIT.get(u, u)}"
+                          f" for {', '.join(where_)}" for (u, p), where_ in kinds.items())
+        raise StackFileError(f"{where}: {key} names interfaces whose laws take the stiffness in different units "
+                             f"({shown}); give index = [...] naming interfaces of one unit")
+    ((unit, p),) = kinds
+    return unit, p
 
 
-def read_bounds(raw: object, dim: str, where: str) -> tuple[float, float]:
-    """`[lower, upper]` with units -> SI floats, lower < upper. Raises `StackFileError`."""
+_STIFFNESS_UNIT = {"hertz_stiffness": "N/m^1.5", "linear_stiffness": "N/m", "power_stiffness": "N/m^p"}
+
+
+def read_bounds(raw: object, dim: str, where: str, exponent: float | None = None) -> tuple[float, float]:
+    """`[lower, upper]` with units -> SI floats, lower < upper (`exponent`: a power law's p, for its
+    stiffness in N/m^p). Raises `StackFileError`."""
     from .units import parse_quantity
 
     if raw is None:
         raise StackFileError(f"{where}: missing; give [lower, upper] with units")
     if not isinstance(raw, list) or len(raw) != 2:
         raise StackFileError(f"{where}: {raw!r} is invalid: two values [lower, upper] with units")
-    lo, hi = (parse_quantity(b, dim, where) for b in raw)
+    lo, hi = (parse_quantity(b, dim, where, exponent=exponent) for b in raw)
     if not (math.isfinite(lo) and math.isfinite(hi)) or not lo < hi:
         raise StackFileError(f"{where}: {raw!r} is invalid: the lower bound must be below the upper")
     return lo, hi

@@ -56,7 +56,7 @@ from typing import Any
 import numpy as np
 
 from .errors import StackFileError
-from .keys import KEYS, Slot, check_values, dimension, read_bounds, read_entry, resolve
+from .keys import KEYS, Slot, check_values, quantity_of, read_bounds, read_entry, resolve
 from .stackfile import StackSpec, parse_srs_table, parse_stack
 from .units import parse_quantity
 from .status import Status
@@ -256,7 +256,8 @@ def parse_optimize(raw: Any, spec: StackSpec) -> OptimizeSpec:
         key = item["key"]
         resolve(key, None, n=3, ground=True, where=f"{where}.key")  # known key (indices checked per n)
         row = KEYS[key]
-        lo, hi = read_bounds(item.get("bounds"), dimension(spec, key, item.get("index")), f"{where}.bounds")
+        dim, p = quantity_of(spec, key, item.get("index"), where)
+        lo, hi = read_bounds(item.get("bounds"), dim, f"{where}.bounds", p)
         check_values(key, [lo, hi], f"{where}.bounds", shown=repr(item["bounds"]))
         if out.get("n") and "index" in item and row.over in ("mass", "gap"):
             raise _err(f"{where}.index", "with optimize.n give no index: the interior masses (or every gap) vary")

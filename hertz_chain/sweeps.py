@@ -52,7 +52,7 @@ import numpy as np
 
 from .constants import INDEPENDENT_BELOW
 from .errors import StackFileError
-from .keys import Slot, check_values, dimension, read_bounds, read_entry, resolve, valid_values
+from .keys import Slot, check_values, quantity_of, read_bounds, read_entry, resolve, valid_values
 from .stackfile import StackSpec, load_stack_file
 from .units import parse_quantity
 
@@ -143,8 +143,20 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
     key, index = item["key"], item.get("index")
     n = spec.n or 3
     resolve(key, index, n=n, ground=spec.has_ground, where=where)  # the key and its indices
-    dim = dimension(spec, key, index)
-    q = lambda raw, k: parse_quantity(raw, dim, f"{where}.{k}")  # noqa: E731
+    dim, p = quantity_of(spec, key, index, where)
+    q = lambda raw, k: parse_quantity(raw, dim, f"{where}.{k}", exponent=p)  # noqa: E731
+    # the keys of this kind of axis only (a key that does not apply would be silently ignored)
+    if sample is None:
+        mode, own = "a grid axis", ("values", "space", "start", "stop", "num")
+    elif sample in ("sobol", "lhs"):
+        mode, own = f"sample = '{sample}'", ("bounds",)
+    elif item.get("distribution", "normal") == "normal":
+        mode, own = "a normal Monte-Carlo axis", ("distribution", "std")
+    else:
+        mode, own = "a uniform Monte-Carlo axis", ("distribution", "bounds")
+    for k in item:
+        if k not in ("key", "index") + own:
+            raise _err(f"{where}.{k}", f"not used by {mode}; its keys: key, index, {', '.join(own)}")
     values = bounds = distribution = std = None
     if sample is None:
         if "values" in item:
@@ -171,7 +183,7 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
             values = tuple((np.geomspace(a, b, num) if space == "log" else np.linspace(a, b, num)).tolist())
             check_values(key, [a, b], f"{where}.start")
     elif sample in ("sobol", "lhs"):
-        bounds = read_bounds(item.get("bounds"), dim, f"{where}.bounds")
+        bounds = read_bounds(item.get("bounds"), dim, f"{where}.bounds", p)
         check_values(key, bounds, f"{where}.bounds", shown=repr(item["bounds"]))
     else:  # montecarlo
         distribution = item.get("distribution", "normal")
@@ -184,7 +196,7 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
             if not std > 0:
                 raise _err(f"{where}.std", f"{item['std']!r} is invalid: must be > 0")
         else:
-            bounds = read_bounds(item.get("bounds"), dim, f"{where}.bounds")
+            bounds = read_bounds(item.get("bounds"), dim, f"{where}.bounds", p)
             check_values(key, bounds, f"{where}.bounds", shown=repr(item["bounds"]))
     return AxisSpec(key, index, values, bounds, distribution, std, where)
 
@@ -215,6 +227,8 @@ def parse_sweep(raw: Any, spec: StackSpec) -> SweepSpec:
         if not isinstance(raw["durations"], bool):
             raise _err("sweep.durations", f"{raw['durations']!r} is invalid: true or false")
         out["durations"] = raw["durations"]
+    if sample is not None and "combine" in raw:
+        raise _err("sweep.combine", f"used only with grid axes; sample = '{sample}' draws its designs together")
     if sample is not None and "samples" not in out:
         raise _err("sweep.samples", f"missing; sample = '{sample}' needs the number of samples")
     if sample is None and "samples" in out:
@@ -561,7 +575,8 @@ _CF_UNITS = {"dimensionless": "1", "mass": "kg", "length": "m", "time": "s", "ve
 
 
 def _units(spec: StackSpec, a: AxisSpec) -> str:
-    return _CF_UNITS.get(dimension(spec, a.key, a.index), "1")
+    dim, p = quantity_of(spec, a.key, a.index)
+    return f"N m-{p:g}" if dim == "power_stiffness" else _CF_UNITS.get(dim, "1")
 
 
 def _write_chunk(path: Path, plan: _Plan, c: int, res: dict) -> None:

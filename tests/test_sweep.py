@@ -173,6 +173,17 @@ def test_dask_local_cluster_gives_the_same_store(tmp_path):
      ["bounds", "> 0"]),
     ({"axis": [{"key": "stack.gaps", "values": [0, 1e-3]}, {"key": "stack.gaps", "index": [1], "values": [0]}]},
      ["stack.gaps[1]", "sweep.axis[0] too"]),
+    ({"axis": [{"key": "drop.height", "values": ["1 cm"]}, {"key": "drop.impact_velocity", "values": ["1 m/s"]}]},
+     ["drop.height and drop.impact_velocity", "vary one"]),
+    # keys that do not apply to the kind of axis were silently ignored
+    ({"sample": "montecarlo", "samples": 4, "axis": [{"key": "stack.gaps", "std": "0.1 mm",
+                                                      "bounds": ["0 mm", "1 mm"]}]},
+     ["sweep.axis[0].bounds", "not used by a normal Monte-Carlo axis"]),
+    ({"sample": "sobol", "samples": 4, "axis": [{"key": "stack.gaps", "bounds": [0, 1e-3], "values": [0]}]},
+     ["sweep.axis[0].values", "not used by sample = 'sobol'"]),
+    ({"axis": [{"key": "stack.gaps", "values": ["1 mm"], "std": "1 mm"}]}, ["sweep.axis[0].std", "grid axis"]),
+    ({"sample": "lhs", "samples": 4, "combine": "zip", "axis": [{"key": "stack.gaps", "bounds": [0, 1e-3]}]},
+     ["sweep.combine", "grid axes"]),
 ])
 def test_bad_sweep_sections_give_one_line_and_exit_2(tmp_path, capsys, section, words):
     path = _file(tmp_path, section)
@@ -444,3 +455,28 @@ def test_arguments_and_outputs_are_refused_before_any_store(tmp_path, capsys, mo
         main(["plot", str(out), "--x", "stack.gaps", "--y", "stack.gaps", "--output", str(tmp_path / "p.png")])
     err = capsys.readouterr().err
     assert exc.value.code == 2 and err.startswith("hertz-chain: error: --y") and err.count("\n") == 1
+
+
+def test_a_stiffness_axis_takes_the_units_of_the_laws_it_sets(tmp_path, capsys):
+    """`contact.stiffness` without an index sets every interface: where their laws take the stiffness in
+    different units (Tsuji N/m^1.5, Kelvin-Voigt N/m), one line and exit 2 (the Kelvin-Voigt pad was set
+    to the Hertzian values); a power law's stiffness is in N/m^p, p its exponent (it failed to parse),
+    and its coordinate's CF units say so."""
+    mixed = BASE | {"contact": BASE["contact"] | {"interface": [
+        {"index": 2, "law": "kelvin-voigt", "stiffness": "1e7 N/m", "restitution": 0.8}]},
+        "sweep": {"axis": [{"key": "contact.stiffness", "values": ["1e9 N/m^1.5", "2e9 N/m^1.5"]}]}}
+    path = tmp_path / "mixed.toml"
+    path.write_text(tomli_w.dumps(mixed), encoding="utf-8")
+    with pytest.raises(SystemExit) as exc:
+        main(["sweep", str(path), "--output", str(tmp_path / "m.zarr")])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and err.count("\n") == 1 and "different units" in err and "kelvin-voigt at 2" in err
+    power = {"drop": BASE["drop"], "stack": {"masses": [1.0, 0.3], "gaps": "1 mm"},
+             "contact": {"law": "power", "exponent": 2, "alpha": "0.2 s/m", "stiffness": "1e10 N/m^2"},
+             "sweep": {"axis": [{"key": "contact.stiffness", "values": ["1e10 N/m^2", "2e4 N/mm^2"]}]}}
+    path = tmp_path / "power.toml"
+    path.write_text(tomli_w.dumps(power), encoding="utf-8")
+    ds = _open(sweep(path, tmp_path / "p.zarr").path)
+    assert ds["contact.stiffness"].attrs["units"] == "N m-2"
+    np.testing.assert_allclose(ds["contact.stiffness"].values, [1e10, 2e10], rtol=1e-15)
+    assert (ds["status"].values == 0).all()
