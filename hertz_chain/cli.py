@@ -430,7 +430,7 @@ def sweep(
         rate = f", {summary['designs_per_second']:.3g} designs/s" if result.computed else ""
         counts = ", ".join(f"{k} {v}" for k, v in result.status_counts.items())
         chunks = f"{result.computed} chunk{'' if result.computed == 1 else 's'}"
-        typer.echo(f"{result.path}: {result.designs} designs; {chunks} computed, {result.skipped} "
+        typer.echo(f"{result.path}: {plural(result.designs, 'design')}; {chunks} computed, {result.skipped} "
                    f"already done{rate}; status: {counts}")
 
 
