@@ -132,7 +132,7 @@ def test_a_sweep_killed_mid_write_and_before_its_marker_resumes_to_the_same_stor
                 assert np.all(part[name].values[2] == -1), name
             assert np.all(np.isnan(part["top_velocity_gain"].values[2]))
             # CF flags name the codes (hertz_chain.status.Status, and -1)
-            flags = dict(zip(part["status"].attrs["flag_values"].tolist(), part["status"].attrs["flag_meanings"].split()))
+            flags = dict(zip(np.asarray(part["status"].attrs["flag_values"]).tolist(), part["status"].attrs["flag_meanings"].split()))
             assert flags[-1] == "not_run" and flags[0] == "complete" and flags[5] == "failed" and len(flags) == 7
     resumed = sweep(path, out)  # the same sweep again (in this process: its solve is compiled already)
     assert (resumed.computed, resumed.skipped) == (1, 2)  # chunk 2 was recomputed, never 0 or 1 again
