@@ -153,7 +153,7 @@ def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, sa
     if until != "t_max" and (stack.wall or (not isinstance(stack.end_force, jax.core.Tracer) and stack.held)):
         raise ParameterError("until", until, "'t_max' (with a t_max) for a chain held by an end force or a wall: "
                              "it never flies apart, so no cascade ends")
-    if not isinstance(max_steps, (int, np.integer)) or max_steps < 1:
+    if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) or max_steps < 1:
         raise ParameterError("max_steps", max_steps, "an integer >= 1")
     tolerances = tolerances or Tolerances()
     if not isinstance(tolerances, Tolerances):

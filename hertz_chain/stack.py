@@ -63,6 +63,22 @@ def _is_concrete(*xs) -> bool:
     return not any(isinstance(x, jax.core.Tracer) for x in jax.tree.leaves(xs))
 
 
+def _real_array(value: ArrayLike, name: str, shape: tuple | None = None) -> Array:
+    """`value` as a float array, or `ParameterError` naming `name` for what is not numbers (a string, a
+    complex number; `shape`: the one shape allowed)."""
+    if not isinstance(value, jax.core.Tracer):
+        try:
+            a = np.asarray(value)
+        except (TypeError, ValueError):
+            a = np.asarray(None)
+        if a.dtype.kind not in "biuf":
+            raise ParameterError(name, value, "real numbers (SI units; quantity strings belong to stack files)")
+    out = jnp.asarray(value, dtype=float)
+    if shape is not None and out.shape != shape:
+        raise ParameterError(name, f"shape {np.shape(value)}", "a single number" if shape == () else f"shape {shape}")
+    return out
+
+
 def _group_laws(laws: Sequence[AbstractContactLaw], interfaces: Sequence[int]):
     """Group per-interface laws by pytree structure (type and static config) and stack each group."""
     groups: dict = {}
@@ -133,9 +149,9 @@ class Stack(eqx.Module):
         wall_stiffness: ArrayLike | None = None,
         wall_position: ArrayLike | None = None,
     ):
-        masses = jnp.asarray(masses, dtype=float)
-        gravity = jnp.asarray(gravity, dtype=float)
-        end_force = jnp.asarray(end_force, dtype=float)
+        masses = _real_array(masses, "masses")
+        gravity = _real_array(gravity, "gravity", shape=())
+        end_force = _real_array(end_force, "end_force", shape=())
         if masses.ndim != 1:
             raise ParameterError("masses", masses, "a 1-D array of masses (kg), bottom first")
         n = masses.shape[0]
@@ -181,6 +197,9 @@ class Stack(eqx.Module):
                 )
             stacked, groups = (laws,), (tuple(interfaces),)
         else:
+            if isinstance(laws, (str, bytes)) or not hasattr(laws, "__len__"):
+                raise ParameterError("laws", laws, "a contact law (e.g. hertz_chain.Hertz(1e9)) or one per interface; "
+                                     "hertz_chain.make_law builds one from its name")
             laws = list(laws)
             if not ground and len(laws) == n and laws and laws[0] is None:
                 laws = laws[1:]
@@ -462,11 +481,14 @@ class State(eqx.Module):
     velocities: Array
 
     def __init__(self, positions: ArrayLike, velocities: ArrayLike):
-        self.positions = jnp.asarray(positions, dtype=float)
-        self.velocities = jnp.asarray(velocities, dtype=float)
+        self.positions = _real_array(positions, "positions")
+        self.velocities = _real_array(velocities, "velocities")
         if self.positions.shape != self.velocities.shape or self.positions.ndim < 1:
             raise ParameterError("velocities", self.velocities.shape,
                                  f"the shape of positions {self.positions.shape}")
+        for name, a in (("positions", self.positions), ("velocities", self.velocities)):
+            if _is_concrete(a) and not np.all(np.isfinite(np.asarray(a))):
+                raise ParameterError(name, np.asarray(a).tolist(), "finite numbers (m, m/s)")
 
     def flat(self) -> Array:
         """The flat SI state `[x, v, D = 0]` used by `Stack.vector_field`."""
@@ -484,20 +506,22 @@ def _gaps(stack: Stack, gaps) -> Array:
     if g.shape != (n - 1,):
         raise ParameterError("gaps", tuple(g.shape), f"a scalar or shape ({n - 1},): the gap between "
                              "mass j and j+1 (m)")
-    if _is_concrete(g) and not np.all(np.asarray(g) >= 0):
-        raise ParameterError("gaps", np.asarray(g).tolist(), ">= 0 (m)")
+    if _is_concrete(g) and not np.all((np.asarray(g) >= 0) & np.isfinite(np.asarray(g))):
+        raise ParameterError("gaps", np.asarray(g).tolist(), "finite and >= 0 (m)")
     return g
 
 
 def at_impact(stack: Stack, velocity: ArrayLike, gaps: ArrayLike | None = None) -> State:
     """Initial state (a): mass 1 just touches the ground, every mass moves down at `velocity`.
 
-    **Arguments:** `velocity` is the drop (free-fall) speed `v_ff > 0` (m/s); `gaps` (m), a scalar or
-    `(n-1,)`, the gap between the surfaces of masses `j` and `j+1` (default 0: touching, unloaded).
+    **Arguments:** `velocity` is the drop (free-fall) speed `v_ff >= 0` (m/s; 0: mass 1 rests on the
+    ground and the others fall through their gaps onto it; with no gaps nothing falls, and the gains,
+    ratios to `v_ff`, are undefined); `gaps` (m), a scalar or `(n-1,)`, finite and >= 0, the gap between
+    the surfaces of masses `j` and `j+1` (default 0: touching, unloaded).
     Paper Section 4: "initially all the masses are approaching the ground with the same free-fall
     velocity `v_ff`".
     """
-    v = jnp.asarray(velocity, dtype=float)
+    v = _real_array(velocity, "velocity", shape=())
     if _is_concrete(v) and not (np.isfinite(float(v)) and float(v) >= 0):
         raise ParameterError("velocity", float(v), "a finite drop speed >= 0 (m/s, downward)")
     g = _gaps(stack, gaps)
