@@ -161,7 +161,14 @@ def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, sa
     if t_max is None:
         t_max = jnp.nan
     else:
-        tm = np.asarray(t_max, dtype=float)
+        try:
+            tm = np.asarray(t_max, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError("t_max", t_max, "a time > 0 (s)") from None
+        batch = np.ndim(stack.masses) == 2
+        if tm.ndim > int(batch) or (tm.ndim == 1 and tm.shape[0] != np.shape(stack.masses)[0]):
+            raise ParameterError("t_max", f"shape {tm.shape}", f"one time, or one per design ({np.shape(stack.masses)[0]},)"
+                                 if batch else "one time (s)")
         if not np.all(np.isfinite(tm) & (tm > 0)):
             raise ParameterError("t_max", tm.tolist(), "finite and > 0 (s)")
         t_max = jnp.asarray(tm)
@@ -571,8 +578,9 @@ def launch_velocity(
     Use inside `jax.grad` (`adjoint="reverse"`) or `jax.jacfwd`/`jax.jvp` (`adjoint="forward"`), e.g.
     `jax.grad(lambda m: launch_velocity(Stack(m, law, gravity=0.0), at_impact(...))[-1])(masses)`.
     Tolerances default to `rtol = atol = 1e-11` with `resolve_onsets=True`, where gradients matched central
-    finite differences to 3.5e-6 (module docstring). A failed solve raises `SolverError` (under the
-    caller's own `jit`/`grad`/`vmap`, a run-time error through `eqx.error_if`), never a silent NaN.
+    finite differences to 2e-6 (module docstring). A failed solve raises `SolverError` (under the
+    caller's own `jit`/`grad`/`vmap`, a run-time error through `eqx.error_if`, on the value and on its
+    derivative: `_checked`), never a silent NaN.
 
     **Laws whose onset is not smooth** (`registry.LawRow.smooth_onset` is False: Tsuji, Kelvin–Voigt,
     viscoelastic): their `delta^(1/4)`, `sqrt(delta)` or jumping dashpot term has an unbounded derivative
@@ -621,11 +629,12 @@ def prepare_launch(
 ):
     """A compiled `launch(stack, state) -> (n,)` launch velocities (m/s) for stacks of the structure of
     `stack` and `state` (the same number of masses, law classes and interface groups, the same ground and
-    gravity flags): `launch_velocity` without its per-call preparation. The options are checked once,
-    here; each call only flattens its arguments and runs the compiled solve (JAX's `jax.jit` over the
-    arrays), so a repeated solve of the same shape pays tens of microseconds of fixed cost instead of
-    hundreds (`benchmarks/baselines.md`). Values equal `launch_velocity`'s with the same options. For
-    derivatives use `launch_velocity` (this path has no reverse-mode replay).
+    wall; gravity, masses and law parameters are numbers of the design): `launch_velocity` without its
+    per-call preparation. The options are checked once, here; each call only flattens its arguments and
+    runs the compiled solve (JAX's `jax.jit` over the arrays), which saves ~110 us per call of
+    `launch_velocity`'s (a two-mass call of 85 steps: ~220 us against ~330 us, `benchmarks/baselines.md`,
+    README). Values equal `launch_velocity`'s with the same options. For derivatives use
+    `launch_velocity` (this path has no reverse-mode replay).
 
     **Arguments:** as `launch_velocity`; `stack`, `state` fix the structure (and are a valid first call).
 

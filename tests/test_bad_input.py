@@ -517,6 +517,9 @@ API_ROWS = [
     ("state_nan", lambda: __import__("hertz_chain").State([0.0, NAN], [0.0, 0.0]), ParameterError, "positions"),
     ("simulate_max_steps_bool", lambda: __import__("hertz_chain").simulate(
         _stack(2), __import__("hertz_chain").at_impact(_stack(2), 1.0), max_steps=True), ParameterError, "max_steps"),
+    ("simulate_t_max_array", lambda: __import__("hertz_chain").simulate(
+        _stack(2), __import__("hertz_chain").at_impact(_stack(2), 1.0), t_max=[1.0, 2.0]), ParameterError,
+     "t_max = 'shape (2,)' is invalid: one time"),
     ("check_output_missing", lambda: _paths.check_output_path("/nonexistent/r.nc", "--output", (".nc",), False),
      OutputPathError, "--output"),
     ("check_output_suffix", lambda: _paths.check_output_path("r.txt", "--output", (".nc",), False),
