@@ -276,15 +276,19 @@ def simulate(
 CPU_PIECE = 128
 
 
-def _solve_pieces(stacks, states, ts, t_max, cfg, devices) -> dict:
+def _solve_pieces(stacks, states, ts, t_max, cfg, workers: int) -> dict:
     """The designs in pieces of `CPU_PIECE` (all but a lone piece of fewer padded by repeating their last
     design), taken in the order of their regime number (`_regime_numbers`: designs whose cascades take
     alike many steps share a piece, so fewer lanes wait for a piece's slowest design), each piece one
-    vmapped solve on one device, with a thread per device taking the next piece as it finishes (the solve
-    releases Python's lock). A design's piece and companions do not depend on the number of devices, so
-    neither do the results (a sweep's Dask workers, one device each, give a local run's numbers). The
-    slicing is on the host, in NumPy (JAX would dispatch one operation per array and piece: ~3 % of a
-    sweep's time). Returns the outputs as NumPy arrays, in the order given."""
+    vmapped solve, run by `workers` threads that each take the next piece as they finish. The solve
+    releases Python's lock and a CPU computation runs on its calling thread
+    (`_config.run_cpu_computations_inline`; with JAX's asynchronous CPU dispatch too), so one compiled
+    program on the default device keeps every core busy (measured: 2,048 designs on 2 cores as fast as
+    one thread per device, which compiled the program once per device: +3 s and +0.3 GB on a cold
+    cache). A design's piece and companions do not depend on the number of workers, so neither do the
+    results (a sweep's Dask workers, one core each, give a local run's numbers). The slicing is on the
+    host, in NumPy (JAX would dispatch one operation per array and piece: ~3 % of a sweep's time).
+    Returns the outputs as NumPy arrays, in the order given."""
     import concurrent.futures
     import threading
 
@@ -296,22 +300,21 @@ def _solve_pieces(stacks, states, ts, t_max, cfg, devices) -> dict:
     todo, lock = iter(starts), threading.Lock()
     outs = {}
 
-    def work(device):
+    def work():
         while True:
             with lock:
                 i = next(todo, None)
             if i is None:
                 return
             part = jax.tree.map(lambda a: _grow(a[i : i + size], size) if eqx.is_array(a) else a, sorted_)
-            part = jax.device_put(part, device)
             outs[i] = jax.tree.map(lambda a: np.asarray(a)[: min(size, B - i)], _solve_batch(*part[:2], ts, part[2], cfg))
 
-    devices = devices[: len(starts)]
-    if len(devices) == 1:
-        work(devices[0])
+    workers = max(1, min(workers, len(starts)))
+    if workers == 1:
+        work()
     else:
-        with concurrent.futures.ThreadPoolExecutor(len(devices)) as pool:
-            for f in [pool.submit(work, d) for d in devices]:
+        with concurrent.futures.ThreadPoolExecutor(workers) as pool:
+            for f in [pool.submit(work) for _ in range(workers)]:
                 f.result()
     back = np.argsort(order)
     return jax.tree.map(lambda *a: np.concatenate(a)[back], *[outs[i] for i in starts])
@@ -416,8 +419,8 @@ def simulate_batch(
     module docstring, "Batches") the designs are split over them. On a CPU, more than `CPU_PIECE`
     designs are solved in pieces of `CPU_PIECE`, taken in the order of the designs' regime number
     (`_regime_numbers`: designs whose cascades take alike many steps share a piece, so fewer lanes wait
-    for a piece's slowest design), each piece on one device, every device taking the next piece as it
-    finishes; which designs share a piece does not depend on the number of devices, so neither do the
+    for a piece's slowest design), each piece one vmapped solve, a thread per core taking the next piece as
+    it finishes; which designs share a piece does not depend on the number of cores, so neither do the
     results. Results come back in the order given; a design's solution depends on its companions in a
     piece only by rounding (vectorised kernels round differently, and adaptive steps carry that to the
     tolerance: the top mass's launch velocity within ~1e-8 relative, a near-resting bottom mass's launch,
@@ -464,7 +467,7 @@ def simulate_batch(
             if eqx.is_array(a) else a, (stacks, states))
     ndev = jax.local_device_count()
     if jax.default_backend() == "cpu" and (B > CPU_PIECE or (_pieces and B > 1)):
-        out = _solve_pieces(stacks, states, ts, t_max, cfg, jax.local_devices())
+        out = _solve_pieces(stacks, states, ts, t_max, cfg, ndev)
     else:  # one vmapped solve, split over the devices (not an implicit solver's: its linear solves fail
         # under `jax.shard_map`)
         out = _solve_designs(stacks, states, ts, t_max, cfg,
