@@ -529,8 +529,9 @@ def markdown(data: dict) -> str:
               f"{b['n']}-mass designs ({b['regime']}), rtol = atol = {b['rtol']:g}, max_steps = {b['rows'][0]['max_steps']} "
               f"(a power of two with 25 % headroom over the slowest design). ms per design (batch time / B); "
               f"designs/s = B / batch time. "
-              f"`simulate_batch`: the library's batched entry point, which splits the designs over the "
-              f"{b['devices']} XLA CPU devices (one per core) from B >= 2 x devices, with the step history (default) "
+              f"`simulate_batch`: the library's batched entry point, which splits up to 128 designs over the "
+              f"{b['devices']} XLA CPU devices (one per core; from B >= 2 x devices) and solves more in pieces of "
+              f"128, a thread per core taking the next piece, with the step history (default) "
               f"and without (`save_steps=False`: launch data and energy audit only); `vmap`: "
               f"`jax.jit(jax.vmap(launch_velocity))` on one device; `pmap`: the same split over the devices "
               f"with `jax.pmap`.", "",
@@ -576,7 +577,7 @@ def markdown(data: dict) -> str:
         L += ["Subprocesses (`benchmarks/probe_compile.py`): cold = empty `HERTZ_CHAIN_CACHE_DIR`, warm = the same folder "
               "again. first = trace + compile (or cache load) + run; second = run only. 5-mass gapped Tsuji, default tolerances. "
               "compiled / traced on disk: the solve's entry in JAX's compilation cache / its `jax.export` module "
-              "(`hertz_chain._export`, which skips the trace; only under `EQX_ON_ERROR=nan`).", "",
+              "(`hertz_chain._export`, which skips the trace; under either `EQX_ON_ERROR`).", "",
               "| env | phase | import s | simulate first s | simulate second s | launch_velocity first s | launch second s | compiled on disk | traced on disk |",
               "|---|---|---|---|---|---|---|---|---|"]
         for label, rec in c["probe"].items():

@@ -126,7 +126,7 @@ def plot_sweep(store: str | Path, path: str | Path, *, x: str, y: str | None = N
     """A line (`x` only) or a map (`x` and `y`) of the variable `var` of a sweep store, as a PNG.
 
     Grid sweeps: `x` and `y` are axis dimensions; any other axis is taken at its first value (said in the
-    title), and a line plot draws one line per value of a single remaining dimension. Sampled or zipped
+    title), and a line plot draws one line per value of the first remaining dimension. Sampled or zipped
     sweeps: `x` and `y` are sampled variables, drawn as a scatter (coloured by `var` with `y`).
     Raises `ParameterError` naming the flag for an unknown name."""
     import matplotlib
@@ -138,7 +138,7 @@ def plot_sweep(store: str | Path, path: str | Path, *, x: str, y: str | None = N
     from .errors import ParameterError
 
     ds = xr.open_zarr(store, consolidated=False)
-    names = [k for k in ds.data_vars if k != "chunk_done"]
+    names = sorted(k for k in ds.data_vars if k != "chunk_done")
     if var not in ds.data_vars or var == "chunk_done":
         raise ParameterError("--var", var, f"one of {', '.join(names)}")
     allowed = [d for d in ds.dims if d not in ("mass", "interface", "chunk")] if "design" not in ds.dims else \
@@ -184,7 +184,7 @@ def plot_sweep(store: str | Path, path: str | Path, *, x: str, y: str | None = N
         scale(x, ax.set_xscale)
     else:
         rest = [d for d in da.dims if d not in (x, y)]
-        fixed = [d for d in rest if not (y is None and len(rest) == 1)]
+        fixed = rest[1:] if y is None else rest  # a line plot: one line per value of the first other axis
         if fixed:
             da = da.isel({d: 0 for d in fixed})
             title += "; at " + ", ".join(f"{d} = {float(ds[d][0]):.4g}" for d in fixed if d in ds.coords)

@@ -170,6 +170,8 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
                 raise _err(f"{where}.values", f"{raw!r} is invalid: a non-empty list of values with units")
             values = tuple(q(v, "values") for v in raw)
             check_values(key, values, f"{where}.values")
+            if len(set(values)) != len(values):
+                raise _err(f"{where}.values", f"{raw!r} repeats a value; give each value once")
         else:
             for k in ("start", "stop", "num"):
                 if k not in item:
@@ -181,6 +183,10 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
             if isinstance(num, bool) or not isinstance(num, int) or not 1 <= num <= 10_000_000:
                 raise _err(f"{where}.num", f"{num!r} is invalid: an integer from 1 to 10000000")
             a, b = q(item["start"], "start"), q(item["stop"], "stop")
+            if num == 1 and a != b:
+                raise _err(f"{where}.num", "1 takes start only; give num >= 2, or values = [start]")
+            if num > 1 and a == b:
+                raise _err(f"{where}.stop", f"{item['stop']!r} equals start; give a range, or values = [start]")
             if space == "log" and not (a > 0 and b > 0):
                 raise _err(f"{where}.start", "a log axis needs start and stop > 0")
             values = tuple((np.geomspace(a, b, num) if space == "log" else np.linspace(a, b, num)).tolist())
@@ -515,7 +521,7 @@ def _event_driven_gains(masses, states, stacks, e_rig, have, ground: bool, speed
 # ------------------------------------------------------------------------------------------ the store
 def _fingerprint(text: str) -> str:
     """The sweep's identity: a hash of the parsed stack file (its keys and values; comments, blank lines and
-    the order of tables do not change it). A store made before 2026-11-28 holds the hash of the raw text,
+    the order of tables do not change it). A store made before the nineteenth session (2026-11-27) holds the hash of the raw text,
     which `_check_store` accepts too."""
     import tomllib
 
@@ -558,7 +564,8 @@ def _create_store(path: Path, plan: _Plan, text: str, source: str | None) -> Non
 
         for a in plan.sweep.axes:
             data[a.label] = xr.Variable(("design",), da.full(shape, np.nan, chunks=chunks),
-                                        attrs={"units": _units(plan.spec, a), "long_name": f"sampled {a.label}"})
+                                        attrs={"units": _units(plan.spec, a), "long_name":
+                                               f"{'sampled' if plan.sweep.sample else 'swept (zipped)'} {a.label}"})
     coords["mass"] = xr.Variable(("mass",), np.arange(1, n + 1), attrs={"long_name": "mass number, 1 = bottom"})
     coords["interface"] = xr.Variable(("interface",), np.arange(n),
                                       attrs={"long_name": "interface number: 0 = ground-mass 1, j = mass j-mass j+1"})

@@ -185,6 +185,9 @@ def test_dask_local_cluster_gives_the_same_store(tmp_path):
     ({"sample": "sobol", "samples": 4, "axis": [{"key": "stack.gaps", "bounds": [0, 1e-3], "values": [0]}]},
      ["sweep.axis[0].values", "not used by sample = 'sobol'"]),
     ({"axis": [{"key": "stack.gaps", "values": ["1 mm"], "std": "1 mm"}]}, ["sweep.axis[0].std", "grid axis"]),
+    ({"axis": [{"key": "stack.gaps", "values": ["1 mm", "0.1 cm"]}]}, ["sweep.axis[0].values", "repeats"]),
+    ({"axis": [{"key": "stack.gaps", "space": "log", "start": "1 mm", "stop": "1 cm", "num": 1}]},
+     ["sweep.axis[0].num", "start only"]),
     ({"sample": "lhs", "samples": 4, "combine": "zip", "axis": [{"key": "stack.gaps", "bounds": [0, 1e-3]}]},
      ["sweep.combine", "grid axes"]),
 ])
