@@ -135,16 +135,14 @@ def test_designs_past_the_checks_fail_without_being_solved(save_steps):
 def test_cpu_pieces_give_the_same_numbers_on_any_number_of_cores(monkeypatch):
     """A design's piece and companions do not depend on the cores (`simulation._solve_pieces`): the same
     seven designs in pieces of three, by one thread and by two, give bit-for-bit equal results (a sweep's
-    Dask workers have one core each, a local run every core). Both against the designs' own solves (the
-    top launch velocity to 1e-8)."""
+    Dask workers have one core each, a local run every core), and the elastic two-mass launch of paper
+    Eq 19, v_top / v = 2 (2 / (1 + r)) - 1, to 1e-8."""
     from hertz_chain import simulation
 
-    if jax.default_backend() != "cpu" or jax.local_device_count() < 2:
-        pytest.skip("conftest's two CPU devices")
     monkeypatch.setattr(simulation, "CPU_PIECE", 3)
-    ratios = [0.3, 0.35, 0.4, 0.5, 0.55, 0.6, 0.7]
-    stacks = [Stack(r ** np.arange(3), HuntCrossley(1e9, 0.05), gravity=G) for r in ratios]
-    states = [at_impact(s, 1.0, 1e-4 * (1 + i)) for i, s in enumerate(stacks)]
+    ratios = np.array([0.3, 0.35, 0.4, 0.5, 0.55, 0.6, 0.7])
+    stacks = [Stack([1.0, r], HuntCrossley(1e9, 0.0), gravity=0.0) for r in ratios]
+    states = [at_impact(s, 1.0, 0.01 * (1 + i)) for i, s in enumerate(stacks)]  # wide: independent impacts
     bs, xs = stack_designs(stacks), jax.tree.map(lambda *x: jnp.stack(x), *states)
     ts, t_max, cfg = simulation._prepare(bs, xs, None, None, "tsit5", TIGHT, 2000, None, False, "cascade")
     t_max = jnp.full(7, jnp.nan)
@@ -152,26 +150,22 @@ def test_cpu_pieces_give_the_same_numbers_on_any_number_of_cores(monkeypatch):
     two = simulation._solve_pieces(bs, xs, ts, t_max, cfg, 2)
     for k in ("launch_velocities", "num_steps", "energy_error", "peak_forces", "restitutions"):
         np.testing.assert_array_equal(one[k], two[k], err_msg=k)
-    for i in range(7):
-        ref = simulate(stacks[i], states[i], tolerances=TIGHT, max_steps=2000)
-        assert one["launch_velocities"][i, -1] == pytest.approx(ref.launch_velocities[-1], rel=1e-8)
+    np.testing.assert_allclose(one["launch_velocities"][:, -1], 2 * (2 / (1 + ratios)) - 1, rtol=1e-8)
 
 
 def test_an_implicit_solver_solves_batches(monkeypatch):
     """Kvaerno5's linear solves failed under `jax.shard_map` (a batch of 4 or more on two devices raised
-    "pytree does not match out_structure"): a batch of 4 solves on one device, and in pieces of 3
-    (`CPU_PIECE`) on both, each design as its own solve gives it (the top launch velocity to 1e-7)."""
+    "pytree does not match out_structure"): a batch of 4 solves whole, and in pieces of 3 (`CPU_PIECE`),
+    each giving the elastic two-mass launch of paper Eq 19 to 1e-7."""
     from hertz_chain import simulation
 
     ratios = np.linspace(0.3, 0.7, 4)
-    stacks = [Stack(r ** np.arange(3), HuntCrossley(1e9, 0.05), gravity=G) for r in ratios]
-    states = [at_impact(s, 1.0, 1e-4) for s in stacks]
+    stacks = [Stack([1.0, r], HuntCrossley(1e9, 0.0), gravity=0.0) for r in ratios]
+    states = [at_impact(s, 1.0, 0.01) for s in stacks]  # wide gaps: independent impacts
     args = (stack_designs(stacks), jax.tree.map(lambda *x: jnp.stack(x), *states))
     whole = simulate_batch(*args, solver="kvaerno5", save_steps=False)
     monkeypatch.setattr(simulation, "CPU_PIECE", 3)
     pieces = simulate_batch(*args, solver="kvaerno5", save_steps=False)
-    assert whole.ok.all() and pieces.ok.all()
-    for i in (0, 3):
-        ref = simulate(stacks[i], states[i], solver="kvaerno5")
-        for b in (whole, pieces):
-            assert b.launch_velocities[i, -1] == pytest.approx(ref.launch_velocities[-1], rel=1e-7)
+    for b in (whole, pieces):
+        assert b.ok.all()
+        np.testing.assert_allclose(b.launch_velocities[:, -1], 2 * (2 / (1 + ratios)) - 1, rtol=1e-7)

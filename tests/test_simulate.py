@@ -318,27 +318,23 @@ def test_a_failed_solve_raises_through_the_callers_derivatives():
     """Under the caller's `jit`, `jax.grad` drops the primal value: a check on it alone was removed with
     it, and a failed solve (t_max of 1 us before a contact 10 ms away) gave zero gradients. Now: the
     replayed reverse mode and forward mode raise; reverse mode through a diffrax adjoint gives NaN (a
-    NaN cotangent) wherever the result depends on the parameter. The same solve with the default `t_max` gives Eq 19's derivative:
-    d/dm2 [2 (2 / (1 + m2/m1)) - 1] = -4 / m1 / (1 + r)^2, to 1e-6."""
-    law, tol = Hertz(1e9), Tolerances(rtol=1e-11, atol=1e-11)
+    NaN cotangent) wherever the result depends on the parameter. (Gradients of solves that end are
+    checked against central differences in tests/test_gradients.py, through the same guard.)"""
+    law, tol = Hertz(1e9), Tolerances(rtol=1e-8, atol=1e-8)
     state = at_impact(Stack(jnp.asarray([1.0, 0.3]), law, gravity=0.0), 1.0, 0.01)
 
-    def top(adjoint, t_max=1e-6):
-        return lambda m: hc.launch_velocity(Stack(m, law, gravity=0.0), state, tolerances=tol, t_max=t_max,
-                                            adjoint=adjoint)[-1]
+    def top(adjoint):
+        return lambda m: hc.launch_velocity(Stack(m, law, gravity=0.0), state, tolerances=tol, t_max=1e-6,
+                                            max_steps=64, adjoint=adjoint)[-1]
 
     m = jnp.asarray([1.0, 0.3])
     with pytest.raises(Exception, match="the cascade did not end"):
         np.asarray(jax.jit(jax.grad(top("reverse")))(m))
     with pytest.raises(Exception, match="the cascade did not end"):
-        np.asarray(jax.jit(jax.vmap(jax.grad(top("reverse"))))(jnp.stack([m, m])))
-    with pytest.raises(Exception, match="the cascade did not end"):
         np.asarray(jax.jit(jax.jacfwd(top("forward")))(m))
     # (before any contact the top's velocity depends on m1 only, through the scales: d/dm2 stays an exact 0)
-    g = np.asarray(jax.jit(jax.grad(top(dfx.RecursiveCheckpointAdjoint(), 1e-6)))(m))
+    g = np.asarray(jax.jit(jax.grad(top(dfx.RecursiveCheckpointAdjoint(checkpoints=64))))(m))
     assert np.isnan(g[0])
-    g = np.asarray(jax.jit(jax.grad(top("reverse", None)))(m))
-    assert g[1] == pytest.approx(-4.0 / (1.0 + 0.3) ** 2, rel=1e-6)
 
 
 def test_parameters_past_the_checks_fail_instead_of_returning_nan():
