@@ -411,10 +411,19 @@ def sweep(
     else:  # one chunk: no steady rate to record either (the first chunk includes the compilation)
         typer.echo("hertz-chain: sweep: one chunk: no time estimate", err=True)
 
-    def estimate(done, todo, seconds):  # once, after the first chunk, when no recorded rate was printed
-        if done == 1 and todo > 1 and not rate and not sys.stderr.isatty():
-            typer.echo(f"hertz-chain: sweep: first chunk in {seconds:.1f} s (with compilation); about "
-                       f"{seconds * (todo - 1):.0f} s or less for the other {todo - 1}", err=True)
+    first = {}
+
+    def estimate(done, todo, seconds):  # when no recorded rate was printed: after the first chunk (which
+        # compiles: an upper bound), and after the second at its steady rate
+        if rate or sys.stderr.isatty() or todo < 2:
+            return
+        if done == 1:
+            first["s"] = seconds
+            typer.echo(f"hertz-chain: sweep: first chunk in {seconds:.1f} s (with compilation); at most about "
+                       f"{seconds * (todo - 1):.0f} s for the other {todo - 1}", err=True)
+        elif done == 2 and todo > 2:
+            typer.echo(f"hertz-chain: sweep: second chunk in {seconds - first['s']:.2g} s; about "
+                       f"{(seconds - first['s']) * (todo - 2):.2g} s for the other {todo - 2}", err=True)
 
     try:
         result = run_sweep(stack_file, output, workers=workers, scheduler=scheduler, progress=sys.stderr.isatty(),
