@@ -62,9 +62,10 @@ wrapper around the diffrax solver (`_Tracked`; diffrax keeps the state of accept
 step history is needed: `launch_velocity` and `simulate_batch(..., save_steps=False)` save none, and
 their cost per step does not grow with `max_steps`.
 
-**Batches.** `simulate_batch` vmaps one compiled solve over the designs and, when there are several JAX
-devices, splits the designs over them (`jax.shard_map`); on a CPU every core is made a device before
-JAX starts (`HERTZ_CHAIN_CPU_DEVICES` overrides; a choice the user made first is kept).
+**Batches.** `simulate_batch` vmaps one compiled solve over the designs. Up to `CPU_PIECE` designs (all
+of them on a GPU) are split over the JAX devices (`jax.shard_map`; on a CPU every core is made a device
+before JAX starts, `HERTZ_CHAIN_CPU_DEVICES` overrides, a choice the user made first is kept); more, on a
+CPU, are solved in pieces of `CPU_PIECE` by a thread per core (`_solve_pieces`).
 
 **Gradients.** Discretise-then-optimise through the solver: `launch_velocity` differentiates the
 discrete solve, forward (`adjoint="forward"`, `jax.jacfwd`) or reverse (`"reverse"`, `jax.grad`, by
