@@ -189,10 +189,14 @@ def _launch_outputs(stack: Stack, sc: Scales, scale, core: dict, until: str = "c
     t_end = jnp.where(held, t_fin, t_end)
     status = jnp.where(jnp.all(jnp.isfinite(y_fin)) | (status == Status.INCOMPLETE_MAX_STEPS), status,
                        Status.FAILED)
-    # a run that ended with a non-finite launch velocity (parameters outside what the laws allow, e.g. a
-    # negative mass set past `Stack`'s checks) failed: its headline results are not valid
+    # a run that ended with a non-finite launch velocity of a mass that was launched (parameters outside
+    # what the laws allow, e.g. a negative mass set past `Stack`'s checks) failed: its headline results
+    # are not valid (a mass never pushed has no launch, NaN with a NaN launch time, by design: `_launch`)
+    # and so did a run of masses no stack may have (not finite and > 0; set past `Stack`'s checks)
     ended = (status == Status.COMPLETE) | (status == Status.COMPLETE_WITH_REBOUNDS)
-    status = jnp.where(ended & ~jnp.all(jnp.isfinite(v_launch)), Status.FAILED, status)
+    broken = jnp.any(jnp.isfinite(t_end) & ~jnp.isfinite(v_launch))
+    broken |= ~jnp.all(jnp.isfinite(stack.masses) & (stack.masses > 0))
+    status = jnp.where(ended & broken, Status.FAILED, status)
     return dict(
         status=status,
         t_final=t_fin,

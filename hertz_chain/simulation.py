@@ -104,6 +104,7 @@ from ._solve import (  # noqa: F401  (`_scaled_field`: the benchmarks' scipy com
     _solve_batch,
     _solve_impl,
     _solve_sharded,
+    _vmapped,
 )
 from ._solver import UNTIL, Tolerances, UnrolledTsit5, _SolveConfig, _make_adjoint, make_solver
 from .contact import AbstractContactLaw
@@ -298,25 +299,35 @@ def _solve_pieces(stacks, states, ts, t_max, cfg, workers: int) -> dict:
     order = np.argsort(np.asarray(_regime_numbers(stacks, states)), kind="stable") if B > size else np.arange(B)
     sorted_ = jax.tree.map(lambda a: np.asarray(a)[order] if eqx.is_array(a) else a, (stacks, states, t_max))
     starts = list(range(0, B, size))
-    todo, lock = iter(starts), threading.Lock()
+    todo, lock, stop = iter(starts), threading.Lock(), threading.Event()
     outs = {}
 
     def work():
-        while True:
+        while not stop.is_set():
             with lock:
                 i = next(todo, None)
             if i is None:
                 return
             part = jax.tree.map(lambda a: _grow(a[i : i + size], size) if eqx.is_array(a) else a, sorted_)
-            outs[i] = jax.tree.map(lambda a: np.asarray(a)[: min(size, B - i)], _solve_batch(*part[:2], ts, part[2], cfg))
+            try:
+                outs[i] = jax.tree.map(lambda a: np.asarray(a)[: min(size, B - i)],
+                                       _solve_batch(*part[:2], ts, part[2], cfg))
+            except BaseException:
+                stop.set()  # the other threads take no further piece
+                raise
 
     workers = max(1, min(workers, len(starts)))
     if workers == 1:
         work()
     else:
         with concurrent.futures.ThreadPoolExecutor(workers) as pool:
-            for f in [pool.submit(work) for _ in range(workers)]:
-                f.result()
+            futures = [pool.submit(work) for _ in range(workers)]
+            try:
+                for f in futures:
+                    f.result()
+            except BaseException:  # (an error in a thread, or Ctrl-C here): no further piece starts
+                stop.set()
+                raise
     back = np.argsort(order)
     return jax.tree.map(lambda *a: np.concatenate(a)[back], *[outs[i] for i in starts])
 
@@ -467,14 +478,18 @@ def simulate_batch(
             lambda a: np.where(invalid.reshape((B,) + (1,) * (np.ndim(a) - 1)), np.asarray(a)[ok], a)
             if eqx.is_array(a) else a, (stacks, states))
     ndev = jax.local_device_count()
-    if jax.default_backend() == "cpu" and (B > CPU_PIECE or (_pieces and B > 1)):
+    if invalid is not None and invalid.all():  # nothing to solve: the outputs' layout, every design failed
+        shapes = eqx.filter_eval_shape(_vmapped, stacks, states, ts, t_max, cfg)
+        out = jax.tree.map(lambda a: np.full(a.shape, np.nan if jnp.issubdtype(a.dtype, jnp.inexact) else 0, a.dtype),
+                           shapes)
+    elif jax.default_backend() == "cpu" and (B > CPU_PIECE or (_pieces and B > 1)):
         out = _solve_pieces(stacks, states, ts, t_max, cfg, ndev)
     else:  # one vmapped solve, split over the devices (not an implicit solver's: its linear solves fail
         # under `jax.shard_map`)
         out = _solve_designs(stacks, states, ts, t_max, cfg,
                              1 if isinstance(cfg.solver, dfx.AbstractImplicitSolver) else ndev)
     out = _post_history(out, stacks, batched=True)
-    if invalid is not None and invalid.any() and not invalid.all():
+    if invalid is not None and invalid.any():
         out = _fail_designs(out, invalid)
     np_ = lambda a: np.asarray(a)  # noqa: E731
     return BatchSolution(

@@ -66,12 +66,12 @@ def _is_concrete(*xs) -> bool:
 def _real_array(value: ArrayLike, name: str, shape: tuple | None = None) -> Array:
     """`value` as a float array, or `ParameterError` naming `name` for what is not numbers (a string, a
     complex number; `shape`: the one shape allowed)."""
-    if not isinstance(value, jax.core.Tracer):
+    if _is_concrete(value):  # (a list may hold tracers: a differentiable stack written [m1, m2])
         try:
             a = np.asarray(value)
         except (TypeError, ValueError):
             a = np.asarray(None)
-        if a.dtype.kind not in "biuf":
+        if a.dtype.kind in "USOcM" or a.dtype == object:  # strings, objects, complex, dates (bfloat16: "V")
             raise ParameterError(name, value, "real numbers (SI units; quantity strings belong to stack files)")
     out = jnp.asarray(value, dtype=float)
     if shape is not None and out.shape != shape:

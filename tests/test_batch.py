@@ -130,6 +130,11 @@ def test_designs_past_the_checks_fail_without_being_solved(save_steps):
     for i, r in ((0, 0.3), (4, 0.6)):
         assert b.launch_velocities[i, -1] == pytest.approx(2 * (2 / (1 + r)) - 1, rel=1e-8)
     assert np.asarray(b.stack.masses)[1, 1] == -0.5  # the designs as given
+    # a batch of nothing but such designs is not solved either (it ran to max_steps)
+    none = simulate_batch(jax.tree.map(lambda a: a[1:4], stacks), jax.tree.map(lambda a: a[1:4], states),
+                          tolerances=TIGHT, save_steps=save_steps)
+    assert none.status_code.tolist() == [5, 5, 5] and np.all(none.num_steps == 0)
+    assert np.all(np.isnan(none.launch_velocities))
 
 
 def test_cpu_pieces_give_the_same_numbers_on_any_number_of_cores(monkeypatch):

@@ -349,6 +349,15 @@ def test_parameters_past_the_checks_fail_instead_of_returning_nan():
         hc.launch_velocity(bad, state)
     with pytest.raises(hc.SolverError, match="the cascade did not end"):
         hc.prepare_launch(stack, state)(bad, state)
+    # a mass that is never pushed has no launch (NaN) in a run that is complete: three equal elastic masses
+    # in free space, mass 1 moving up at 1 m/s onto mass 2 at rest, mass 3 moving away at 5 m/s; equal
+    # masses in an elastic impact exchange their velocities (Newton's cradle), so mass 1 stops, mass 2
+    # leaves at 1 m/s and never reaches mass 3
+    free = Stack(jnp.ones(3), Hertz(1e9), gravity=0.0, ground=False)
+    sol = hc.simulate(free, State([0.0, 0.01, 0.02], [1.0, 0.0, 5.0]), tolerances=TIGHT)
+    assert sol.status == Status.COMPLETE
+    assert sol.launch_velocities[0] == pytest.approx(0.0, abs=1e-8)
+    assert sol.launch_velocities[1] == pytest.approx(1.0, rel=1e-8) and np.isnan(sol.launch_velocities[2])
 
 
 def test_a_state_of_another_length_is_refused_by_every_entry_point():

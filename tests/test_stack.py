@@ -159,3 +159,13 @@ def test_batched_designs_and_grad_through_builders():
 def test_bad_parameters_raise_parameter_error(make):
     with pytest.raises(ParameterError):
         make()
+
+
+def test_lists_of_traced_numbers_build_stacks_and_states():
+    """A differentiable stack written as a list (`Stack([m1, m], ...)` under `jax.grad`) and a state of traced
+    velocities under `jax.jit`: the input checks look at concrete numbers only (d sum(masses) / dm = 1)."""
+    import hertz_chain as hc
+
+    law = hc.Hertz(1e9)
+    assert jax.grad(lambda m: hc.Stack([1.0, m], law).masses.sum())(0.3) == 1.0
+    np.testing.assert_array_equal(jax.jit(lambda v: hc.State([0.0, 0.01], [v, v]).velocities)(-1.0), [-1.0, -1.0])
