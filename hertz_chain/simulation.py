@@ -271,10 +271,11 @@ def simulate(
 
 
 #: On a CPU, `simulate_batch` solves more designs than this in pieces of this many, each piece one vmapped
-#: solve on one device (`_solve_pieces`): a vmapped loop runs until its slowest design ends and works on
-#: all of them every step, so smaller pieces waste less on the designs that ended, and their arrays stay
-#: in the caches (measured 2026-11-25 on 2 cores: 128 per device fastest; 2,048 five-mass sweep designs
-#: 1.71 s against 2.07 s in one call, gapped; 64 slower again). A GPU takes the batch whole.
+#: solve, a thread per core (`_solve_pieces`): a vmapped loop runs until its slowest design ends and works
+#: on all of them every step, so smaller pieces waste less on the designs that ended, and their arrays
+#: stay in the caches (measured 2026-11-25 on 2 cores: 128 per core fastest; 2,048 five-mass sweep designs
+#: 1.71 s against 2.07 s in one call, gapped; 64 slower again, and again on 2026-11-27 with the threads:
+#: 1,104-1,179 against 1,177-1,188 sweep designs/s). A GPU takes the batch whole.
 CPU_PIECE = 128
 
 
