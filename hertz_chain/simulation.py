@@ -138,6 +138,13 @@ def _not_traced(fn: str, stack, state) -> None:
                              "prepare_launch's function")
 
 
+def _check_state_shape(stack: Stack, state: State) -> None:
+    """`ParameterError` unless the state's positions and velocities have the masses' shape."""
+    if np.shape(state.positions) != np.shape(stack.masses) or np.shape(state.velocities) != np.shape(stack.masses):
+        raise ParameterError("state", f"positions {np.shape(state.positions)}, velocities {np.shape(state.velocities)}",
+                             f"positions and velocities of the masses' shape {np.shape(stack.masses)}")
+
+
 def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, save_steps=True, until="cascade"):
     if until not in UNTIL:
         raise ParameterError("until", until, "'cascade' (stop when the first cascade ends), 'launch' (stop when "
@@ -149,9 +156,7 @@ def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, sa
         raise ParameterError("stack", type(stack).__name__, "a hertz_chain.Stack")
     if not isinstance(state, State):
         raise ParameterError("state", type(state).__name__, "a hertz_chain.State (at_impact, dropped, resting)")
-    if np.shape(state.positions) != np.shape(stack.masses) or np.shape(state.velocities) != np.shape(stack.masses):
-        raise ParameterError("state", f"positions {np.shape(state.positions)}, velocities {np.shape(state.velocities)}",
-                             f"positions and velocities of the masses' shape {np.shape(stack.masses)}")
+    _check_state_shape(stack, state)
     if until != "t_max" and (stack.wall or (not isinstance(stack.end_force, jax.core.Tracer) and stack.held)):
         raise ParameterError("until", until, "'t_max' (with a t_max) for a chain held by an end force or a wall: "
                              "it never flies apart, so no cascade ends")
@@ -686,10 +691,8 @@ def prepare_launch(
     prepared_for = _describe(stack)
 
     def launch(stack: Stack, state: State) -> Array:
-        if isinstance(stack, Stack) and isinstance(state, State) and (
-                np.shape(state.positions) != np.shape(stack.masses) or np.shape(state.velocities) != np.shape(stack.masses)):
-            raise ParameterError("state", f"positions {np.shape(state.positions)}, velocities {np.shape(state.velocities)}",
-                                 f"positions and velocities of the masses' shape {np.shape(stack.masses)}")
+        if isinstance(stack, Stack) and isinstance(state, State):
+            _check_state_shape(stack, state)
         lv, tree2 = jax.tree_util.tree_flatten((stack, state))
         arrays = [x for x, a in zip(lv, is_array) if a] if tree2 == tree else None
         if (arrays is None or [np.shape(x) for x in arrays] != shapes
