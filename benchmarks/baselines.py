@@ -51,13 +51,32 @@ FIRST_STEP = hc.Tolerances().first_step  # scaled units, the library default
 
 # ============================================================================ the equations, in numba
 @njit(cache=True)
-def field_into(out, f, fel, dd, ys, m, k, c, ground, scale, T):
+def field_factors(m, scale, T):
+    """The field's per-solve divisors as factors (`field_into`'s `fac`, `(5, n)`): rows `T v_s / x_s`,
+    `T / (m v_s)`, `T / D_s` per mass, `1 / F_s` per interface (`F_s = m*_j V^2 / L`), and `1 / L` (row 4,
+    entry 0). Computed once per solve, as the library's `FieldArgs.of` does: a division costs several
+    multiplications, so the floor gets the same saving."""
+    n = m.shape[0]
+    fac = np.zeros((5, n))
+    for i in range(n):
+        fac[0, i] = T * scale[n + i] / scale[i]
+        fac[1, i] = T / (m[i] * scale[n + i])
+        fac[2, i] = T / scale[2 * n + i]
+        mu = m[0] if i == 0 else m[i - 1] * m[i] / (m[i - 1] + m[i])
+        fac[3, i] = scale[0] / (mu * scale[n] * scale[n])
+    fac[4, 0] = 1.0 / scale[0]
+    return fac
+
+
+@njit(cache=True)
+def field_into(out, f, fel, dd, ys, m, k, c, ground, scale, fac):
     """The scaled vector field of a stack (`hertz_chain._solve._scaled_field`) written into `out`, for a
     state of `3n` entries `[x, v, D]` or, with the library's onset proxies (`Tolerances.resolve_onsets`,
     its default), `4n` entries `[x, v, D, z]` with `z_j' = sqrt(max(delta_j, 0) / L) + sqrt(F_j / F_s)`,
     `F_s = m*_j V^2 / L`: Hertz `k d^1.5`
     plus Tsuji damping `c d^0.25 d'` (c = eta sqrt(m_eff k); 0 for Hertz), clamped >= 0. `f`, `fel`, `dd`
-    are scratch arrays of length n. The flag entry of the library's state (no dynamics) is left out."""
+    are scratch arrays of length n; `fac`: `field_factors`. The flag entry of the library's state (no
+    dynamics) is left out."""
     n = m.shape[0]
     proxy = ys.shape[0] == 4 * n
     for j in range(n):
@@ -77,15 +96,13 @@ def field_into(out, f, fel, dd, ys, m, k, c, ground, scale, T):
             f[j] = fj if fj > 0.0 else 0.0
         if proxy:
             on = ground or j > 0
-            mu = m[0] if j == 0 else m[j - 1] * m[j] / (m[j - 1] + m[j])
-            fs = mu * scale[n] * scale[n] / scale[0]
-            out[3 * n + j] = (math.sqrt((d if d > 0.0 else 0.0) / scale[0] + 1e-300)
-                              + math.sqrt(f[j] / fs + 1e-300)) if on else 0.0
+            out[3 * n + j] = (math.sqrt((d if d > 0.0 else 0.0) * fac[4, 0] + 1e-300)
+                              + math.sqrt(f[j] * fac[3, j] + 1e-300)) if on else 0.0
     for i in range(n):
         above = f[i + 1] if i + 1 < n else 0.0
-        out[i] = T * ys[n + i] * scale[n + i] / scale[i]
-        out[n + i] = T * (f[i] - above) / m[i] / scale[n + i]
-        out[2 * n + i] = T * (f[i] - fel[i]) * dd[i] / scale[2 * n + i]
+        out[i] = ys[n + i] * fac[0, i]
+        out[n + i] = (f[i] - above) * fac[1, i]
+        out[2 * n + i] = (f[i] - fel[i]) * dd[i] * fac[2, i]
 
 
 @njit(cache=True)
@@ -93,7 +110,7 @@ def field(ys, m, k, c, ground, scale, T):
     """`field_into` returning a new array (for scipy and the checks)."""
     n = m.shape[0]
     out = np.empty(ys.shape[0])
-    field_into(out, np.empty(n), np.empty(n), np.empty(n), ys, m, k, c, ground, scale, T)
+    field_into(out, np.empty(n), np.empty(n), np.empty(n), ys, m, k, c, ground, scale, field_factors(m, scale, T))
     return out
 
 
@@ -168,7 +185,8 @@ def tsit5(y0, t1, rtol, atol, max_step, first_step, m, k, c, ground, scale, T, A
     ys = np.empty(n3)
     K = np.empty((7, n3))
     f, fel, dd = np.empty(n), np.empty(n), np.empty(n)
-    field_into(K[0], f, fel, dd, y, m, k, c, ground, scale, T)
+    fac = field_factors(m, scale, T)
+    field_into(K[0], f, fel, dd, y, m, k, c, ground, scale, fac)
     t = 0.0
     h = first_step
     prev_inv = 1.0
@@ -182,7 +200,7 @@ def tsit5(y0, t1, rtol, atol, max_step, first_step, m, k, c, ground, scale, T, A
                 for r in range(s):
                     acc += ht * A[s, r] * K[r, i]
                 ys[i] = acc
-            field_into(K[s], f, fel, dd, ys, m, k, c, ground, scale, T)
+            field_into(K[s], f, fel, dd, ys, m, k, c, ground, scale, fac)
         total = 0.0
         for i in range(n3):
             ynew = y[i]
@@ -399,7 +417,8 @@ class Case:
 
         if not hasattr(self, "_jax_solve"):
             self._jax_solve = jax_tsit5_solver()
-            self._jax_args = FieldArgs(self.stack, self.scale, self.T)
+            # the per-solve factors of the library's own solve (`FieldArgs.of`): the same saving
+            self._jax_args = FieldArgs.of(self.stack, np.asarray(self.scale), self.T)
         y0 = np.append(self.y0p, 0.0)
         run = lambda: jax.block_until_ready(self._jax_solve(y0, self.t1, rtol, self._jax_args))  # noqa: E731
         y, steps, acc = run()

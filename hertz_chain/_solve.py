@@ -47,11 +47,13 @@ def _scaled_field(t, ys, args):
     stack, scale, T = args.stack, args.scale, args.T
     n3 = scale.shape[0]
     y = ys[:n3] * scale
+    # the divisors as factors where the solve computed them once (`FieldArgs.rate`, ...)
+    rate = T / scale if args.rate is None else args.rate
     if ys.shape[0] <= n3 + 1:  # no onset proxies
-        dy = T * stack.vector_field(t * T, y) / scale
+        dy = stack.vector_field_and_forces(t * T, y, args.inv_masses)[0] * rate
         return dy if ys.shape[0] == n3 else jnp.concatenate([dy, jnp.zeros(1, dy.dtype)])
-    dy, f = stack.vector_field_and_forces(t * T, y)
-    dy = T * dy / scale
+    dy, f = stack.vector_field_and_forces(t * T, y, args.inv_masses)
+    dy = dy * rate
     # onset proxy (`Tolerances.resolve_onsets`): z_j' = sqrt(delta_j+ / L) + sqrt(F_j / F_s), F_s = m*_j V^2 / L,
     # whose local error is O(h^1.5) wherever a contact closes (the kink of F ~ delta^{3/2}; the steeper rise
     # of a damped law) and wherever a clamped contact lets go (its force's kink at F = 0), so the step
@@ -63,8 +65,9 @@ def _scaled_field(t, ys, args):
     inv_f = args.inv_force if args.inv_force is not None else \
         scale[0] / (stack.effective_masses() * scale[stack.n] ** 2)
     # (a law's force is zero for delta <= 0; `maximum` drops an unclamped law's tension)
-    z = (jnp.where(mask, jnp.sqrt(d_safe), 0.0) / jnp.sqrt(scale[0])
-         + jnp.sqrt(jnp.maximum(f, 0.0) * inv_f + 1e-300))
+    root = jnp.where(mask, jnp.sqrt(d_safe), 0.0)
+    root = root / jnp.sqrt(scale[0]) if args.inv_root_length is None else root * args.inv_root_length
+    z = root + jnp.sqrt(jnp.maximum(f, 0.0) * inv_f + 1e-300)
     return jnp.concatenate([dy, z * stack.interface_mask(), jnp.zeros(1, dy.dtype)])
 
 
@@ -128,8 +131,7 @@ def _diffeqsolve(stack: Stack, y0s, t1s, scale, T, ts_s, cfg: _SolveConfig, hist
         t1=t1s,
         dt0=None,  # the controller's `first_step` (`FlightController.init`)
         y0=y0s,
-        args=FieldArgs(stack, scale, T, y0s[stack.n : 2 * stack.n],
-                       scale[0] / (stack.effective_masses() * scale[stack.n] ** 2)),
+        args=FieldArgs.of(stack, scale, T, y0s[stack.n : 2 * stack.n]),
         saveat=dfx.SaveAt(subs=subs, solver_state=True),
         stepsize_controller=cfg.tolerances.controller(onsets=onsets),
         event=dfx.Event(_cascade_complete) if cfg.until != "t_max" else None,

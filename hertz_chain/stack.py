@@ -398,15 +398,19 @@ class Stack(eqx.Module):
         d = jnp.where(d > 0, d, 0.0)
         return 0.4 * self.wall_stiffness * d**2.5
 
-    def accelerations(self, forces: Array, x: Array | None = None) -> Array:
+    def accelerations(self, forces: Array, x: Array | None = None, inv_masses: Array | None = None) -> Array:
         """`(..., n)` accelerations of the masses (m/s², upward) from the interface forces, gravity, the
-        end force and (from the positions `x`, needed with a wall) the far wall's force on the top mass."""
+        end force and (from the positions `x`, needed with a wall) the far wall's force on the top mass.
+        `inv_masses`: `1 / masses`, where the caller computed it once (a multiplication instead of a
+        division per call, equal to rounding)."""
         top = jnp.broadcast_to(self.end_force[..., None], forces[..., :1].shape)
         if self.wall:
             if x is None:
                 raise ParameterError("x", None, "the positions, for the far wall's force")
             top = top + self.wall_force(x)[..., None]
         above = jnp.concatenate([forces[..., 1:], top], axis=-1)
+        if inv_masses is not None:
+            return (forces - above) * inv_masses - self.gravity
         return (forces - above) / self.masses - self.gravity
 
     # ---------------------------------------------------------------- dynamics
@@ -426,16 +430,18 @@ class Stack(eqx.Module):
         """
         return self.vector_field_and_forces(t, y)[0]
 
-    def vector_field_and_forces(self, t, y: Array) -> tuple[Array, Array]:
+    def vector_field_and_forces(self, t, y: Array, inv_masses: Array | None = None) -> tuple[Array, Array]:
         """`vector_field(t, y)` and the `(..., n)` contact forces (N) it used (one evaluation of the
-        laws; the solver's onset proxy reads the forces, `hertz_chain._solve._scaled_field`)."""
+        laws; the solver's onset proxy reads the forces, `hertz_chain._solve._scaled_field`).
+        `inv_masses`: as in `accelerations`."""
         x, v, _ = self.split(y)
         q = self.memory(y)
         d, dd = self.overlaps(x), self.overlap_rates(v)
         f = self.forces(d, dd, q)
         if q is None:  # the common path: the damping part's power, from the forces at hand
-            return jnp.concatenate([v, self.accelerations(f, x), (f - self.elastic_forces(d)) * dd], axis=-1), f
-        parts = [v, self.accelerations(f, x), self.dissipated_powers(d, dd, q), self.memory_rates(d, dd, q)]
+            return jnp.concatenate([v, self.accelerations(f, x, inv_masses), (f - self.elastic_forces(d)) * dd],
+                                   axis=-1), f
+        parts = [v, self.accelerations(f, x, inv_masses), self.dissipated_powers(d, dd, q), self.memory_rates(d, dd, q)]
         return jnp.concatenate(parts, axis=-1), f
 
     def energies(self, y: Array) -> dict[str, Array]:
