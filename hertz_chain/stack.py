@@ -32,6 +32,7 @@ from jaxtyping import Array, ArrayLike
 
 from . import _config  # noqa: F401  (float64)
 from .contact import AbstractContactLaw
+from ._fusion import materialised
 from .constants import MAX_MASSES, STANDARD_GRAVITY
 from .errors import ParameterError
 
@@ -439,7 +440,9 @@ class Stack(eqx.Module):
         d, dd = self.overlaps(x), self.overlap_rates(v)
         f = self.forces(d, dd, q)
         if q is None:  # the common path: the damping part's power, from the forces at hand
-            return jnp.concatenate([v, self.accelerations(f, x, inv_masses), (f - self.elastic_forces(d)) * dd],
+            # one kernel for the forces in a vmapped solve, not one evaluation per element that reads them
+            f, fel = materialised(f, self.elastic_forces(d))
+            return jnp.concatenate([v, self.accelerations(f, x, inv_masses), (f - fel) * dd],
                                    axis=-1), f
         parts = [v, self.accelerations(f, x, inv_masses), self.dissipated_powers(d, dd, q), self.memory_rates(d, dd, q)]
         return jnp.concatenate(parts, axis=-1), f
