@@ -12,6 +12,7 @@ import jax.numpy as jnp
 from jaxtyping import Array
 
 from . import _config  # noqa: F401  (float64)
+from ._fusion import materialised
 from .stack import Stack
 
 #: A scaled velocity that differs from free flight by more than this has felt a contact.
@@ -271,7 +272,10 @@ class _Contacts(eqx.Module):
         acc = jnp.zeros(n, ys.dtype) if dys is None else stack.overlap_rates(dys[n : 2 * n])
         q = stack.memory(y)
         d, dd = stack.overlaps(x), stack.overlap_rates(v)
-        active = stack.in_contact(d, dd, q) & stack.interface_mask()
+        # the forces once, in a kernel of their own in a vmapped solve (`_fusion`): every column of `rows`
+        # and every row of `peaks` reads them
+        (forces,) = materialised(stack.forces(d, dd, q))
+        active = stack.in_contact(d, dd, q, forces) & stack.interface_mask()
         e = stack.total_energy(y) if audit else None
         v_top = ys[2 * n - 1]
         if c is None:
@@ -307,7 +311,7 @@ class _Contacts(eqx.Module):
         peaks = pulse = None
         if e is not None:  # elementwise, not `.at[].max`: a scatter is a slow unfused operation in the loop
             e = (c.energy[0], jnp.maximum(c.energy[1], jnp.abs(e - c.energy[0])))
-            f = jnp.where(active, stack.forces(d, dd, q), 0.0)
+            f = jnp.where(active, forces, 0.0)
             never = rows[:, T_IN] < 0  # not yet in contact: the velocities just before the first contact
             first_off = left & jnp.isnan(c.peaks[V_UPPER_AFTER])  # the first point after the first contact
             first_on = (c.rows[:, T_IN] < 0) & active  # the first point in contact (`rows` already holds it)

@@ -369,9 +369,11 @@ class Stack(eqx.Module):
         return self._map_laws(lambda law, d, dd, m: law.separation(d, dd) if m is None else law.separation(d, dd, m),
                               delta, delta_dot, q=q)
 
-    def in_contact(self, delta: Array, delta_dot: Array, q: Array | None = None) -> Array:
-        """`(..., n)` booleans: the contact is closed (force > 0 if clamped, `delta > 0` if not)."""
-        return jnp.where(self.clamped(), self.forces(delta, delta_dot, q) > 0, delta > 0)
+    def in_contact(self, delta: Array, delta_dot: Array, q: Array | None = None, forces: Array | None = None) -> Array:
+        """`(..., n)` booleans: the contact is closed (force > 0 if clamped, `delta > 0` if not). `forces`:
+        `forces(delta, delta_dot, q)`, where the caller has them."""
+        f = self.forces(delta, delta_dot, q) if forces is None else forces
+        return jnp.where(self.clamped(), f > 0, delta > 0)
 
     @property
     def held(self) -> bool:
