@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test docs bench bench-smoke notebooks clean
+.PHONY: demo test docs bench bench-scale bench-smoke notebooks clean
 
 $(STAMP): requirements.lock pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -30,6 +30,10 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/sweep.py --output benchmarks/sweep.md
 	$(BIN)/python benchmarks/long_chains.py --output benchmarks/long_chains.md
 	$(BIN)/python benchmarks/baselines.py --output benchmarks/baselines.md --json benchmarks/baselines.json
+
+# One sweep of 10^6 designs end to end through the CLI (~10 min on 2 cores): benchmarks/sweep_scale.md.
+bench-scale: $(STAMP)
+	$(BIN)/python benchmarks/sweep_scale.py --output benchmarks/sweep_scale.md
 
 # A one-minute smoke run (n = 2, one regime) into out/; CI runs the same through tests/test_benchmarks_smoke.py.
 bench-smoke: $(STAMP)

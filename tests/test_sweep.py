@@ -490,3 +490,26 @@ def test_a_stiffness_axis_takes_the_units_of_the_laws_it_sets(tmp_path, capsys):
     from hertz_chain.sweeps import _units
 
     assert _units(plan.spec, axis) == "N m-2"
+
+
+def test_a_store_is_resumed_in_its_own_chunk_layout(tmp_path):
+    """A store laid out in other chunks than the file gives now (the default `chunk` changed from 1024 to
+    2048 on 2026-11-27, which changes nothing in the file) is resumed in its own layout: every one of its
+    chunks computed once and marked, with the numbers of a fresh run (by rounding: other pieces)."""
+    from hertz_chain import sweeps
+
+    path = _file(tmp_path, {k: v for k, v in GRID.items() if k != "chunk"})
+    text = path.read_text()
+    plan = sweeps._design_map(text, str(path))[0]
+    assert plan.n_chunks == 1  # the default chunk holds the whole grid
+    old = tmp_path / "old.zarr"
+    sweeps._create_store(old, sweeps._with_rows(plan, 1), text, str(path))  # as an older default laid it out
+    result = sweep(path, old)
+    assert (result.chunks, result.computed) == (3, 3)
+    ds = _open(old)
+    assert ds.chunk_done.values.tolist() == [1, 1, 1]
+    assert (sweep(path, old).computed, sweep(path, old).skipped) == (0, 3)  # resumed again: nothing to do
+    assert sweep(path, tmp_path / "new.zarr").chunks == 1
+    fresh = _open(tmp_path / "new.zarr")
+    np.testing.assert_allclose(ds.top_velocity_gain, fresh.top_velocity_gain, rtol=1e-8)
+    np.testing.assert_array_equal(ds.status, fresh.status)
