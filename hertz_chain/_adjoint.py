@@ -79,7 +79,7 @@ class _Replay(eqx.Module):
     split: bool = eqx.field(static=True, default=True)
 
     def _args(self, dyn):
-        return FieldArgs(eqx.combine(dyn, self.stack_static), self.scale, self.T)
+        return FieldArgs.of(eqx.combine(dyn, self.stack_static), self.scale, self.T)  # the divisors as factors
 
     def _overlaps(self, y):
         """Scaled overlaps (in units of the overlap scale, the positions' scale) of a scaled state, or

@@ -17,7 +17,9 @@ alternating processes, this 2-core machine): 0.375-0.417 -> 0.313-0.361 ms per d
 family (8,100 designs with gravity, gaps 1 um-1 cm, stiffness 1e8-1e10): 1,151-1,266 -> 1,439-1,558 designs/s
 for the field, and 1,356-1,468 -> 1,461-1,611 for the tracking's forces.
 A single solve (unbatched) is left as it is: its forces are scalars in a loop of tiny kernels, where one more
-kernel per stage would cost more than the repeated arithmetic.
+kernel per stage would cost more than the repeated arithmetic. Long chains are left to XLA too (`MAX_WIDTH`:
+a dot with the identity costs O(n^2) per row), and laws with memory (Thornton, Jackson-Green) keep their
+field as it was (their tracking is materialised).
 """
 
 from __future__ import annotations
@@ -31,10 +33,19 @@ def _identity(*arrays):
     return arrays
 
 
+#: the widest row (all arrays together) that `materialised` passes through a dot: the identity's dot costs
+#: O(width^2) per row, so long chains (and arrays it was not made for) keep XLA's fusion
+MAX_WIDTH = 64
+
+
 @_identity.def_vmap
 def _identity_vmap(axis_size, in_batched, *arrays):
     arrays = [a if b else jnp.broadcast_to(a, (axis_size,) + a.shape) for a, b in zip(arrays, in_batched)]
     n = arrays[0].shape[-1]
+    if (jax.default_backend() != "cpu" or n * len(arrays) > MAX_WIDTH
+            or any(a.shape != arrays[0].shape or a.dtype != arrays[0].dtype for a in arrays)
+            or not jnp.issubdtype(arrays[0].dtype, jnp.floating)):
+        return tuple(arrays), (True,) * len(arrays)  # measured on a CPU only; see MAX_WIDTH
     # the identity as a dot, exact for finite numbers (x * 1 + 0 + ... + 0; a non-finite force, which fails
     # the solve anyway, turns its own design's row into NaN)
     both = jnp.dot(jnp.concatenate(arrays, axis=-1), jnp.eye(n * len(arrays), dtype=arrays[0].dtype),
@@ -44,10 +55,11 @@ def _identity_vmap(axis_size, in_batched, *arrays):
 
 @jax.custom_jvp
 def materialised(*arrays):
-    """`arrays` unchanged (a tuple): float arrays of the same shape `(..., n)`. Under `jax.vmap`, computed by
-    a kernel of their own (a dot with the identity, which XLA does not fuse) and then read by their
-    consumers, instead of being recomputed inside each consumer's fused loop (module docstring).
-    Derivatives pass through."""
+    """`arrays` unchanged (a tuple): float arrays of the same shape `(..., n)`. Under `jax.vmap` on a CPU,
+    computed by a kernel of their own (a dot with the identity, which XLA does not fuse) and then read by
+    their consumers, instead of being recomputed inside each consumer's fused loop (module docstring); only
+    for rows of at most `MAX_WIDTH` numbers (all arrays together) of one float dtype, otherwise (and on
+    other backends, where it was not measured) passed through as they are. Derivatives pass through."""
     return _identity(*arrays)
 
 

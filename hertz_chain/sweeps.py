@@ -723,7 +723,10 @@ def _store_layout(out: Path) -> int | None:
     import zarr
 
     try:
-        return int(zarr.open_group(str(out), mode="r")["status"].chunks[0])
+        group = zarr.open_group(str(out), mode="r")
+        rows = group.attrs.get("chunk_rows")  # written with the store (an array's own chunks are clipped to
+        # its length where one chunk holds it all)
+        return int(rows) if rows is not None else int(group["status"].chunks[0])
     except Exception:  # noqa: BLE001
         return None
 
@@ -900,7 +903,7 @@ def _sweep(path, output, plan, text, client, workers, scheduler, progress, on_ch
     done = _done(output)
     todo = [c for c in range(plan.n_chunks) if c not in done]
     counts: dict[int, int] = {}
-    bar = _progress(progress, plan, len(todo))
+    bar = _progress(progress, plan, todo)
 
     written, steady = [0], {}  # steady: the time and designs after the first chunk written (which compiles)
 
@@ -957,7 +960,8 @@ def overlap_fractions(first_contacts, t_final, ground: bool) -> np.ndarray:
     return frac.max(axis=1) if frac.shape[1] else np.zeros(len(fc))
 
 
-def _progress(enabled: bool, plan: _Plan, chunks: int):
+def _progress(enabled: bool, plan: _Plan, chunks):
+    """A rich progress bar over the designs of the chunks `chunks` (those this run computes), or None."""
     if not enabled:
         return None
     from rich.console import Console
@@ -966,7 +970,7 @@ def _progress(enabled: bool, plan: _Plan, chunks: int):
     bar = Progress(TextColumn("sweep"), BarColumn(), MofNCompleteColumn(), TextColumn("designs"), TimeElapsedColumn(),
                    TextColumn("eta"), TimeRemainingColumn(), console=Console(stderr=True), transient=True)
     bar.start()
-    task = bar.add_task("sweep", total=plan.size)
+    task = bar.add_task("sweep", total=sum((plan.region(c).stop - plan.region(c).start) * plan.row for c in chunks))
     return bar, task
 
 

@@ -169,3 +169,24 @@ def test_an_implicit_solver_solves_batches():
     b = simulate_batch(*args, solver="kvaerno5", save_steps=False)
     assert b.ok.all()
     np.testing.assert_allclose(b.launch_velocities[:, -1], 2 * (2 / (1 + ratios)) - 1, rtol=1e-7)
+
+
+def test_materialised_forces_are_the_identity_with_their_derivatives():
+    """`_fusion.materialised` (a vmapped solve's forces in a kernel of their own) returns its arrays bit for
+    bit under `jax.vmap`, passes derivatives through (d/dx sum(c * x) = c), and uses its dot only for rows of
+    at most `MAX_WIDTH` numbers: a long chain's forces are passed through (the identity's dot would cost
+    O(n^2) per stage)."""
+    from hertz_chain._fusion import MAX_WIDTH, materialised
+
+    rng = np.random.default_rng(0)
+    for n in (5, MAX_WIDTH):  # a dot (2 x 5 numbers a row) and a pass-through (2 x 64 > 64)
+        f, g, c = rng.normal(size=(7, n)), rng.normal(size=(7, n)), rng.normal(size=(7, n))
+        a, b = jax.vmap(materialised)(f, g)
+        np.testing.assert_array_equal(a, f)
+        np.testing.assert_array_equal(b, g)
+        grad = jax.grad(lambda x: jnp.sum(jax.vmap(materialised)(x, g)[0] * c))(f)
+        np.testing.assert_array_equal(grad, c)
+        tangent = jax.jvp(lambda x: jax.vmap(materialised)(x, g)[1], (f,), (c,))[1]
+        np.testing.assert_array_equal(tangent, 0.0 * c)
+        hlo = jax.jit(jax.vmap(materialised)).lower(f, g).compile().as_text()
+        assert (" dot(" in hlo) == (2 * n <= MAX_WIDTH), n
