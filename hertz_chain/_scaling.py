@@ -88,6 +88,12 @@ def _default_t_max(stack: Stack, state: State, sc: Scales) -> Array:
     return t_fall + 2.0 * jnp.sum(t_gap) + 200.0 * jnp.sum(t_c) + flight
 
 
+def inverse_force_scale(stack: Stack, scale: Array) -> Array:
+    """`(n,)` per interface `1 / F_s`, the onset proxy's force scale `F_s = m*_j V^2 / L` (`scale`: the state's
+    scale vector, `Scales.vector`)."""
+    return scale[0] / (stack.effective_masses() * scale[stack.n] ** 2)
+
+
 class FieldArgs(eqx.Module):
     """What the scaled vector field (`_solve._scaled_field`) and the contact tracking (`_tracking`) read
     besides the state: the system, the state's scale vector (`Scales.vector`), the time scale `T` (s), and
@@ -113,6 +119,5 @@ class FieldArgs(eqx.Module):
     @classmethod
     def of(cls, stack: Stack, scale: Array, T: Array, v0s: Array | None = None) -> "FieldArgs":
         """The arguments of a tracked solve, with every per-solve constant of the field computed once."""
-        n = stack.n
-        return cls(stack, scale, T, v0s, scale[0] / (stack.effective_masses() * scale[n] ** 2),
-                   T / scale, 1.0 / stack.masses, 1.0 / jnp.sqrt(scale[0]))
+        return cls(stack, scale, T, v0s, inverse_force_scale(stack, scale), T / scale, 1.0 / stack.masses,
+                   1.0 / jnp.sqrt(scale[0]))

@@ -16,7 +16,7 @@ import numpy as np
 from . import _config  # float64; SOLVE_COMPILER_OPTIONS
 from ._export import cached_jit
 from ._law_base import _positive_part
-from ._scaling import FieldArgs, Scales, _default_t_max, _scales
+from ._scaling import FieldArgs, Scales, _default_t_max, _scales, inverse_force_scale
 from ._solver import UNROLL_MAX_STATE, UnrolledERK, _SolveConfig
 from ._tracking import (
     PEAK_FORCE,
@@ -62,8 +62,7 @@ def _scaled_field(t, ys, args):
     # the same operations on the same overlap as the Hertzian laws' `sqrt(delta)`, which XLA then computes
     # once for both (one square root fewer per interface and stage); finite derivatives (double `where`)
     mask, d_safe = _positive_part(stack.overlaps(stack.split(y)[0]))
-    inv_f = args.inv_force if args.inv_force is not None else \
-        scale[0] / (stack.effective_masses() * scale[stack.n] ** 2)
+    inv_f = args.inv_force if args.inv_force is not None else inverse_force_scale(stack, scale)
     # (a law's force is zero for delta <= 0; `maximum` drops an unclamped law's tension)
     root = jnp.where(mask, jnp.sqrt(d_safe), 0.0)
     root = root / jnp.sqrt(scale[0]) if args.inv_root_length is None else root * args.inv_root_length
