@@ -29,23 +29,32 @@ SCIPY_METHODS = ("DOP853", "Radau", "LSODA")
 MAX_STEP = hc.Tolerances().max_step  # scaled units (contact times), the library default
 
 
-def interleaved_medians(fns: dict, rounds: int, warmup: int = 1, budget_s: float = 6.0) -> dict:
+def interleaved_medians(fns: dict, rounds: int, warmup: int = 1, budget_s: float = 6.0, block: int = 1) -> dict:
     """Median wall time (s) of each of `fns` (name -> a call that blocks), timed in alternation: every
-    round calls each once, so a slow spell of a shared machine falls on all of them alike and their
+    round calls each in turn, so a slow spell of a shared machine falls on all of them alike and their
     ratios keep (timing them one after the other let a minute's load move a ratio by 30 %). Up to
-    `rounds` rounds after `warmup`, stopping once the rounds have used `budget_s` (at least one)."""
+    `rounds` rounds after `warmup`, stopping once the rounds have used `budget_s` (at least one).
+
+    `block` > 1: every round calls each `block` times in a row and times the last `block - 1` (warm: a
+    user's loop calls the same solve again; the first call after another program finds the caches cold,
+    which cost the library's compiled solve 0-0.8 ms more on the benchmark machine (10 masses; ~0.15 ms
+    for two) and numba's loop no more than the noise, so alternating single calls measured every library
+    call cold)."""
     for _ in range(warmup):
         for fn in fns.values():
             fn()
     ts: dict = {k: [] for k in fns}
-    spent = 0.0
-    while len(next(iter(ts.values()))) < rounds and (spent == 0.0 or spent < budget_s):
+    spent, done = 0.0, 0
+    while done < rounds and (spent == 0.0 or spent < budget_s):
         for k, fn in fns.items():
-            t0 = time.perf_counter()
-            fn()
-            dt = time.perf_counter() - t0
-            ts[k].append(dt)
-            spent += dt
+            for i in range(block):
+                t0 = time.perf_counter()
+                fn()
+                dt = time.perf_counter() - t0
+                if i or block == 1:
+                    ts[k].append(dt)
+                spent += dt
+        done += 1
     return {k: statistics.median(v) for k, v in ts.items()}
 
 

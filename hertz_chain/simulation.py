@@ -627,8 +627,64 @@ def launch_velocity(
     `simulate`: the top's entry is exact, the others are the velocities at that time).
     """
     replay = isinstance(adjoint, str) and adjoint == "reverse"
-    t_max, cfg = _launch_config(stack, state, solver, tolerances, t_max, max_steps, adjoint, until)
-    return _checked(*_launch_jit(stack, state, t_max, cfg, replay), replay)
+    key = None
+    if t_max is None and _top_level((stack, state)):  # a repeated call: its compiled solve (`_Prepared`)
+        lv, tree = jax.tree_util.tree_flatten((stack, state))
+        key = _prepared_key(lv, tree, solver, tolerances, max_steps, adjoint, until)
+        hit = _PREPARED.get(key) if key is not None else None
+        if hit is not None and hit[0] is _solver_row(solver) and not stack.held:
+            return hit[1].run_leaves(lv)
+    t_max_, cfg = _launch_config(stack, state, solver, tolerances, t_max, max_steps, adjoint, until)
+    if key is not None:
+        if len(_PREPARED) >= 64:
+            _PREPARED.pop(next(iter(_PREPARED)))
+        prepared = _Prepared(stack, state, t_max_, cfg, replay)
+        _PREPARED[key] = (_solver_row(solver), prepared)
+        return prepared.run_leaves(lv)
+    return _checked(*_launch_jit(stack, state, t_max_, cfg, replay), replay)
+
+
+# `launch_velocity`'s compiled solves at the top level, by their options and structure (`_prepared_key`): a
+# repeated call of the same options on a stack of the same structure pays ~30 us of Python instead of the
+# ~170 us of checking its options again and of `eqx.filter_jit`'s partition and hashing of the configuration
+_PREPARED: dict = {}
+
+
+def _solver_row(solver):
+    """The registry row of a solver name (None for a solver object): a key of `_PREPARED` is valid only
+    while the row it was made with is the registry's (`_config_for`)."""
+    from .registry import SOLVERS
+
+    return SOLVERS.get(str(solver).lower()) if isinstance(solver, str) else None
+
+
+def _prepared_key(lv, tree, solver, tolerances, max_steps, adjoint, until):
+    """The key of a launch solve in `_PREPARED`: the options, the structure of `(stack, state)` (its tree,
+    its arrays' shapes and dtypes, its other leaves) and whether XLA's CPU options apply; None where an
+    option or a leaf cannot be hashed (then no fast path)."""
+    shapes = tuple((x.shape, x.dtype) if isinstance(x, (jax.Array, np.ndarray)) else x for x in lv)
+    key = (tree, shapes, solver, tolerances, type(max_steps), max_steps, adjoint, until,
+           _config.solve_compiler_options() is None)
+    try:
+        return _Key(key)
+    except TypeError:
+        return None
+
+
+class _Key:
+    """A dict key that hashes its tuple once (a `Tolerances`' hash costs ~5 us: the dict's lookup hashed it
+    again)."""
+
+    __slots__ = ("key", "hash")
+
+    def __init__(self, key: tuple):
+        self.key, self.hash = key, hash(key)
+
+    def __hash__(self) -> int:
+        return self.hash
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, _Key) and self.hash == other.hash and self.key == other.key
 
 
 def _launch_config(stack, state, solver, tolerances, t_max, max_steps, adjoint, until):
@@ -670,40 +726,65 @@ def prepare_launch(
     own `jit`, `grad` or `vmap`, a run-time error through `eqx.error_if`), as `launch_velocity` does.
     """
     t_max_, cfg = _launch_config(stack, state, solver, tolerances, t_max, max_steps, "reverse", until)
-    all_leaves, tree = jax.tree_util.tree_flatten((stack, state))
-    is_array = [eqx.is_array(x) for x in all_leaves]
-    others = [x for x, a in zip(all_leaves, is_array) if not a]
-    shapes = [np.shape(x) for x, a in zip(all_leaves, is_array) if a]
+    return _Prepared(stack, state, t_max_, cfg, False).__call__
 
-    def run(*lv):  # (launch velocities, status)
-        it = iter(lv)
-        full = [next(it) if a else x for x, a in zip(all_leaves, is_array)]
-        s, st = jax.tree_util.tree_unflatten(tree, full)
-        return _launch_impl(s, st, t_max_, cfg, False)
 
-    # At the top level the status is checked on the host after the compiled solve (`_checked`: a
-    # `SolverError`; an `eqx.error_if` inside would raise only when the result is read on a GPU, and keeps
-    # the program out of JAX's persistent cache), with compile options (CPU ones on the CPU backend only);
-    # under the caller's own `jit`/`vmap`/`grad`, `eqx.error_if` in the caller's program, no options
-    nested = jax.jit(lambda *lv: _checked(*run(*lv)))
-    options = _config.solve_compiler_options()
-    compiled = jax.jit(run, compiler_options=options) if options else jax.jit(run)
-    prepared_for = _describe(stack)
+class _Prepared:
+    """The compiled launch solve of one structure of `(stack, state)` and one set of checked options
+    (`prepare_launch`'s function, `launch_velocity`'s repeated calls): a call flattens its arguments,
+    compares their structure with the prepared one (its tree, its arrays' shapes, its other leaves) and
+    runs the compiled solve on the arrays (JAX's `jax.jit`), ~10 us of Python.
 
-    def launch(stack: Stack, state: State) -> Array:
-        if isinstance(stack, Stack) and isinstance(state, State):
-            _check_state_shape(stack, state)
-        lv, tree2 = jax.tree_util.tree_flatten((stack, state))
-        arrays = [x for x, a in zip(lv, is_array) if a] if tree2 == tree else None
-        if (arrays is None or [np.shape(x) for x in arrays] != shapes
-                or [x for x, a in zip(lv, is_array) if not a] != others):
-            raise ParameterError("stack, state", _describe(stack) if isinstance(stack, Stack) else type(stack).__name__,
-                                 f"the structure prepared for: {prepared_for}")
-        if any(isinstance(x, jax.core.Tracer) for x in arrays):
-            return nested(*arrays)
-        return _checked(*compiled(*arrays))
+    At the top level the status is checked on the host after the compiled solve (`_checked`: a
+    `SolverError`; an `eqx.error_if` inside would raise only when the result is read on a GPU, and keeps
+    the program out of JAX's persistent cache), with compile options (CPU ones on the CPU backend only);
+    under the caller's own `jit`/`vmap`/`grad`, `eqx.error_if` in the caller's program, no options."""
 
-    return launch
+    def __init__(self, stack: Stack, state: State, t_max, cfg: _SolveConfig, replay: bool):
+        all_leaves, self.tree = jax.tree_util.tree_flatten((stack, state))
+        is_array = [eqx.is_array(x) for x in all_leaves]
+        self.array_at = [i for i, a in enumerate(is_array) if a]
+        self.other_at = [i for i, a in enumerate(is_array) if not a]
+        self.others = [all_leaves[i] for i in self.other_at]
+        self.shapes = tuple(np.shape(all_leaves[i]) for i in self.array_at)
+        self.prepared_for = _describe(stack)
+        tree = self.tree
+
+        def run(*arrays):  # (launch velocities, status)
+            it = iter(arrays)
+            full = [next(it) if a else x for x, a in zip(all_leaves, is_array)]
+            s, st = jax.tree_util.tree_unflatten(tree, full)
+            return _launch_impl(s, st, t_max, cfg, replay)
+
+        self.nested = jax.jit(lambda *arrays: _checked(*run(*arrays), replay))
+        options = _config.solve_compiler_options()
+        self.compiled = jax.jit(run, compiler_options=options) if options else jax.jit(run)
+
+    def run_leaves(self, lv: list) -> Array:
+        """The launch velocities of the flattened `(stack, state)` `lv`, of the prepared structure."""
+        arrays = [lv[i] for i in self.array_at]
+        for x in arrays:
+            if isinstance(x, jax.core.Tracer):
+                return self.nested(*arrays)
+        return _checked(*self.compiled(*arrays))
+
+    def __call__(self, stack: Stack, state: State) -> Array:
+        """`launch(stack, state) -> (n,)` launch velocities (m/s); `ParameterError` for a stack or state of
+        another structure, `SolverError` for a solve that does not end (`prepare_launch`)."""
+        lv, tree = jax.tree_util.tree_flatten((stack, state))
+        if (tree != self.tree or tuple(getattr(lv[i], "shape", None) for i in self.array_at) != self.shapes
+                or [lv[i] for i in self.other_at] != self.others):
+            _prepared_mismatch(stack, state, self.prepared_for)
+        return self.run_leaves(lv)
+
+
+def _prepared_mismatch(stack, state, prepared_for: str):
+    """Raise `ParameterError` for a call of `prepare_launch`'s function on a stack or state of another
+    structure (its masses' and state's shapes first, then the structure)."""
+    if isinstance(stack, Stack) and isinstance(state, State):
+        _check_state_shape(stack, state)
+    raise ParameterError("stack, state", _describe(stack) if isinstance(stack, Stack) else type(stack).__name__,
+                         f"the structure prepared for: {prepared_for}")
 
 
 # ==================================================================== one contact

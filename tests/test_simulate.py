@@ -293,6 +293,41 @@ def test_prepared_launch_equals_launch_velocity_and_paper_eq_19():
                                   np.asarray(hc.launch_velocity(*design([1.0, 0.3], g=9.81), tolerances=tol)))
 
 
+def test_a_repeated_launch_velocity_call_keeps_every_check(monkeypatch):
+    """A repeated `launch_velocity` call of the same options on a stack of the same structure runs its
+    compiled solve without preparing it again (`simulation._PREPARED`). It must still give each design's
+    own numbers (paper Eq 19, n = 2, e = 1, widely gapped, no gravity: 1e-8), refuse what the first call
+    would refuse (a held chain; a state of another length), raise for a failed solve, and read a registry
+    row replaced since (its numbers equal those of the replacement solver named directly)."""
+    from hertz_chain import registry
+
+    law, tol = Hertz(1e9), Tolerances(rtol=1e-11, atol=1e-11)
+
+    def design(m, **kw):
+        stack = Stack(jnp.asarray(m), law, gravity=0.0, **kw)
+        return stack, at_impact(stack, 1.0, 0.01)
+
+    for m in ([1.0, 0.3], [2.0, 0.5], [1.0, 0.9]):  # the first call prepares, the others reuse
+        r = m[1] / m[0]
+        v = hc.launch_velocity(*design(m), tolerances=tol)
+        assert float(v[-1]) == pytest.approx(2 * (2 / (1 + r)) - 1, rel=1e-8)  # Eq 19
+    with pytest.raises(ParameterError, match="until"):  # held by an end force: the same structure
+        hc.launch_velocity(*design([1.0, 0.3], end_force=5.0), tolerances=tol)
+    stack, _ = design([1.0, 0.3])
+    with pytest.raises(ParameterError, match=r"positions \(3,\)"):
+        hc.launch_velocity(stack, State([0.0, 0.01, 0.02], [-1.0] * 3), tolerances=tol)
+    bad = eqx.tree_at(lambda s: s.masses, stack, jnp.asarray([1.0, -0.3]))
+    with pytest.raises(hc.SolverError, match="the cascade did not end"):
+        hc.launch_velocity(bad, design([1.0, 0.3])[1], tolerances=tol)
+    loose = Tolerances(rtol=1e-5, atol=1e-5)
+    before = np.asarray(hc.launch_velocity(*design([1.0, 0.3]), tolerances=loose))
+    monkeypatch.setitem(registry.SOLVERS, "tsit5", registry.SOLVERS["dopri5"])
+    after = np.asarray(hc.launch_velocity(*design([1.0, 0.3]), tolerances=loose))
+    np.testing.assert_array_equal(after, np.asarray(hc.launch_velocity(*design([1.0, 0.3]), tolerances=loose,
+                                                                       solver="dopri5")))
+    assert not np.array_equal(after, before)
+
+
 def test_launch_velocity_raises_where_the_cascade_does_not_end():
     """Solver trouble is reported, never a silent number: a 1 cm gap closed at 1 m/s takes 10 ms, so a
     `t_max` of 1 us ends the solve before any contact, and `launch_velocity` and a prepared launch raise
