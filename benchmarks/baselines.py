@@ -536,7 +536,8 @@ def run_case(n: int, regime: str, quick: bool) -> dict:
 
 def fixed_cost(quick: bool) -> dict:
     """The fixed cost per call of `launch_velocity` and of `prepare_launch`'s callable: time against
-    steps over a tolerance ladder (n = 2, gapped Hertz), the intercept of the least-squares line.
+    steps over a tolerance ladder (n = 2, gapped Hertz), the intercept of the Theil-Sen line (the
+    median of the pairwise slopes: one rung a load spike hit cannot tilt it).
 
     Each rung is a loop of calls of the same solve (warm, as in an optimiser's or a fit's loop: the
     same stack shape solved again), the median of its calls after the first; the ladder is run three
@@ -562,12 +563,14 @@ def fixed_cost(quick: bool) -> dict:
             for key, fn in zip(("launch_velocity_us", "prepared_us"), calls[r["rtol"]]):
                 r[key] = min(r[key], 1e6 * median_time(fn, n, warmup=3, budget_s=1.0))
     cold = interleaved_medians({rtol: calls[rtol][1] for rtol in rtols}, 20 if quick else 100, budget_s=4.0)
+    from scipy.stats import theilslopes  # a line that one rung hit by a load spike cannot tilt
+
     x = np.array([r["steps"] for r in rows], dtype=float)
     out = dict(rows=rows)
     for key in ("launch_velocity_us", "prepared_us"):
-        slope, intercept = np.polyfit(x, np.array([r[key] for r in rows]), 1)
+        slope, intercept = theilslopes(np.array([r[key] for r in rows]), x)[:2]
         out[key.replace("_us", "_fixed_us")], out[key.replace("_us", "_per_step_us")] = float(intercept), float(slope)
-    slope, intercept = np.polyfit(x, 1e6 * np.array([cold[r] for r in rtols]), 1)
+    slope, intercept = theilslopes(1e6 * np.array([cold[r] for r in rtols]), x)[:2]
     out["prepared_cold_fixed_us"], out["prepared_cold_per_step_us"] = float(intercept), float(slope)
     return out
 
@@ -600,7 +603,8 @@ def _write(data: dict, path: str | None) -> None:
                   "Two-mass gapped Hertz stack over a tolerance ladder; each rung a loop of calls of the same solve "
                   "(warm: the same stack shape solved again, as in an optimiser's loop), its median call time, the "
                   "smallest of three passes over the ladder; the fixed cost is the intercept of time against steps "
-                  "(least squares), the cost per step its slope (`baselines.fixed_cost`).", "",
+                  "(Theil-Sen line: the median of the pairwise slopes, robust to one rung a load spike hit), the cost "
+                  "per step its slope (`baselines.fixed_cost`).", "",
                   "| rtol | steps | `launch_velocity` (us) | `prepare_launch` callable (us) |", "|---|---|---|---|"]
         lines += [f"| {r['rtol']:.0e} | {r['steps']} | {r['launch_velocity_us']:.0f} | {r['prepared_us']:.0f} |"
                   for r in fc["rows"]]

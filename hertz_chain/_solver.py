@@ -14,6 +14,7 @@ import numpy as np
 
 from . import _config  # noqa: F401  (float64)
 from . import registry as _registry
+from ._fusion import materialised
 from .constants import UNTIL  # noqa: F401  (re-exported by simulate)
 from .errors import ParameterError
 
@@ -366,6 +367,9 @@ class UnrolledERK(dfx.AbstractAdaptiveSolver):
             sc = s01[0] + cs * ds
             times = jnp.where(win, t_star + sc**4, t0 + cs * dt).at[0].set(t0).at[-1].set(t1)
             weights = jnp.where(win, 4.0 * sc**3 * ds, dt)
+            # vmapped on a CPU, computed once per step: XLA otherwise fused them into every stage's state
+            # and recomputed them for each of its entries (`_fusion`)
+            times, weights = materialised(times, weights)
             index = {c: i for i, c in enumerate(cs)}
 
             def at(c):  # (time, weight) of a stage at the fraction c of the step

@@ -619,7 +619,11 @@ def launch_velocity(
     reverse mode only), `"forward"` (`jax.jacfwd`, `jax.jvp`), or a diffrax adjoint, e.g.
     `diffrax.RecursiveCheckpointAdjoint()` for higher-order derivatives.
 
-    Cost: reverse mode costs a few solves whatever the number of parameters; forward mode grows with
+    Cost: a repeated call at the top level (not under `jit`/`grad`/`vmap`) with the same options and
+    `t_max=None`, on a stack and state of the same structure (tree, shapes, dtypes), runs the solve compiled
+    by the first such call without checking its options or preparing it again (`_LAUNCHES`: ~60 us of
+    fixed cost per call instead of ~300 us; `prepare_launch` fixes the options once, ~40 us). Reverse
+    mode costs a few solves whatever the number of parameters; forward mode grows with
     it (prefer it for two or three). Reverse mode keeps the accepted states, `32 n` bytes per step of
     `max_steps`. Measured ratios: `benchmarks/results.md`.
 
@@ -628,43 +632,62 @@ def launch_velocity(
     """
     replay = isinstance(adjoint, str) and adjoint == "reverse"
     key = None
-    if t_max is None and _top_level((stack, state)):  # a repeated call: its compiled solve (`_Prepared`)
+    if t_max is None and _top_level((stack, state)):  # a repeated call: its compiled solve (`_Launch`)
         lv, tree = jax.tree_util.tree_flatten((stack, state))
-        key = _prepared_key(lv, tree, solver, tolerances, max_steps, adjoint, until)
-        hit = _PREPARED.get(key) if key is not None else None
+        key = _launch_key(lv, tree, solver, tolerances, max_steps, adjoint, until)
+        hit = _LAUNCHES.get(key) if key is not None else None
         if hit is not None and hit[0] is _solver_row(solver) and not stack.held:
             return hit[1].run_leaves(lv)
     t_max_, cfg = _launch_config(stack, state, solver, tolerances, t_max, max_steps, adjoint, until)
     if key is not None:
-        if len(_PREPARED) >= 64:
-            _PREPARED.pop(next(iter(_PREPARED)))
-        prepared = _Prepared(stack, state, t_max_, cfg, replay)
-        _PREPARED[key] = (_solver_row(solver), prepared)
-        return prepared.run_leaves(lv)
+        launch = _Launch.of(stack, state, t_max_, cfg, replay)
+        _remember(_LAUNCHES, key, (_solver_row(solver), launch), 256)
+        return launch.run_leaves(lv)
     return _checked(*_launch_jit(stack, state, t_max_, cfg, replay), replay)
 
 
-# `launch_velocity`'s compiled solves at the top level, by their options and structure (`_prepared_key`): a
-# repeated call of the same options on a stack of the same structure pays ~30 us of Python instead of the
-# ~170 us of checking its options again and of `eqx.filter_jit`'s partition and hashing of the configuration
-_PREPARED: dict = {}
+# `launch_velocity`'s solves at the top level, by its options as written and the structure of its
+# arguments (`_launch_key`): a repeated call runs its `_Launch` (~30 us of Python) without checking its
+# options again (~170 us with `eqx.filter_jit`'s partition and hashing of the configuration). An option
+# written another way, or a new tolerance, misses here and finds its compiled program in `_PROGRAMS`.
+_LAUNCHES: dict = {}
+# the compiled programs, by what is static about them (`_Program.key`): the tolerances and `t_max` are
+# arguments, so a new tolerance compiles nothing
+_PROGRAMS: dict = {}
+
+
+def _remember(memo: dict, key, value, size: int) -> None:
+    """`memo[key] = value`, the oldest entry dropped beyond `size` (tolerant of another thread's drop)."""
+    memo[key] = value
+    while len(memo) > size:
+        try:
+            memo.pop(next(iter(memo)), None)
+        except (RuntimeError, StopIteration):  # changed by another thread meanwhile
+            break
 
 
 def _solver_row(solver):
-    """The registry row of a solver name (None for a solver object): a key of `_PREPARED` is valid only
-    while the row it was made with is the registry's (`_config_for`)."""
+    """The registry row of a solver name (None for a solver object): an entry of `_LAUNCHES` is valid
+    only while the row it was made with is the registry's (`_config_for`)."""
     from .registry import SOLVERS
 
     return SOLVERS.get(str(solver).lower()) if isinstance(solver, str) else None
 
 
-def _prepared_key(lv, tree, solver, tolerances, max_steps, adjoint, until):
-    """The key of a launch solve in `_PREPARED`: the options, the structure of `(stack, state)` (its tree,
-    its arrays' shapes and dtypes, its other leaves) and whether XLA's CPU options apply; None where an
-    option or a leaf cannot be hashed (then no fast path)."""
-    shapes = tuple((x.shape, x.dtype) if isinstance(x, (jax.Array, np.ndarray)) else x for x in lv)
-    key = (tree, shapes, solver, tolerances, type(max_steps), max_steps, adjoint, until,
-           _config.solve_compiler_options() is None)
+def _leaf_key(x):
+    """A leaf of `(stack, state)` in a key: an array (JAX's, NumPy's, NumPy scalars: what `eqx.is_array`
+    counts) by its shape and dtype, anything else by its value."""
+    shape = getattr(x, "shape", None)
+    return x if shape is None else (tuple(shape), x.dtype)
+
+
+def _launch_key(lv, tree, solver, tolerances, max_steps, adjoint, until):
+    """The key of a launch solve in `_LAUNCHES`: the options as written, the structure of `(stack, state)`
+    (its tree, its arrays' shapes and dtypes, its other leaves) and the compile options in use; None where
+    an option or a leaf cannot be hashed (then no fast path)."""
+    options = _config.solve_compiler_options()
+    key = (tree, tuple(map(_leaf_key, lv)), solver, tolerances, type(max_steps), max_steps, adjoint, until,
+           None if options is None else tuple(sorted(options.items())))
     try:
         return _Key(key)
     except TypeError:
@@ -711,11 +734,14 @@ def prepare_launch(
     """A compiled `launch(stack, state) -> (n,)` launch velocities (m/s) for stacks of the structure of
     `stack` and `state` (the same number of masses, law classes and interface groups, the same ground and
     wall; gravity, masses and law parameters are numbers of the design): `launch_velocity` without its
-    per-call preparation. The options are checked once, here; each call only flattens its arguments and
-    runs the compiled solve (JAX's `jax.jit` over the arrays), which saves ~110 us per call of
-    `launch_velocity`'s (a two-mass call of 85 steps: ~220 us against ~330 us, `benchmarks/baselines.md`,
-    README). Values equal `launch_velocity`'s with the same options. For derivatives use
-    `launch_velocity` (this path has no reverse-mode replay).
+    per-call preparation. The options are checked once, here; each call only flattens its arguments,
+    compares their structure with the prepared one and runs the compiled solve (JAX's `jax.jit` over the
+    arrays): a fixed cost of ~40 us per call (`benchmarks/baselines.md`, "Fixed cost per call").
+    A repeated `launch_velocity` call of the same options on a stack of the same structure reuses such a
+    compiled solve by itself (`_LAUNCHES`), for ~20 us more (it looks its options up); a prepared
+    function fixes them once and names the structure it was prepared for in its error. Values equal
+    `launch_velocity`'s with the same options. For derivatives use `launch_velocity` (this path has no
+    reverse-mode replay).
 
     **Arguments:** as `launch_velocity`; `stack`, `state` fix the structure (and are a valid first call).
 
@@ -726,56 +752,102 @@ def prepare_launch(
     own `jit`, `grad` or `vmap`, a run-time error through `eqx.error_if`), as `launch_velocity` does.
     """
     t_max_, cfg = _launch_config(stack, state, solver, tolerances, t_max, max_steps, "reverse", until)
-    return _Prepared(stack, state, t_max_, cfg, False).__call__
+    return _Launch.of(stack, state, t_max_, cfg, False).__call__
 
 
-class _Prepared:
-    """The compiled launch solve of one structure of `(stack, state)` and one set of checked options
-    (`prepare_launch`'s function, `launch_velocity`'s repeated calls): a call flattens its arguments,
-    compares their structure with the prepared one (its tree, its arrays' shapes, its other leaves) and
-    runs the compiled solve on the arrays (JAX's `jax.jit`), ~10 us of Python.
+class _Program:
+    """The compiled launch solve of one structure of `(stack, state)` and one static configuration: a
+    function of the arrays of `(stack, state)`, the arrays of the configuration (its tolerances) and
+    `t_max`, shared by every `_Launch` of that structure (`_PROGRAMS`).
 
     At the top level the status is checked on the host after the compiled solve (`_checked`: a
     `SolverError`; an `eqx.error_if` inside would raise only when the result is read on a GPU, and keeps
     the program out of JAX's persistent cache), with compile options (CPU ones on the CPU backend only);
     under the caller's own `jit`/`vmap`/`grad`, `eqx.error_if` in the caller's program, no options."""
 
-    def __init__(self, stack: Stack, state: State, t_max, cfg: _SolveConfig, replay: bool):
-        all_leaves, self.tree = jax.tree_util.tree_flatten((stack, state))
+    def __init__(self, stack: Stack, state: State, cfg: _SolveConfig, replay: bool):
+        all_leaves, tree = jax.tree_util.tree_flatten((stack, state))
         is_array = [eqx.is_array(x) for x in all_leaves]
         self.array_at = [i for i, a in enumerate(is_array) if a]
         self.other_at = [i for i, a in enumerate(is_array) if not a]
         self.others = [all_leaves[i] for i in self.other_at]
-        self.shapes = tuple(np.shape(all_leaves[i]) for i in self.array_at)
-        self.prepared_for = _describe(stack)
-        tree = self.tree
+        self.tree = tree
+        cfg_arrays, cfg_static = eqx.partition(cfg, eqx.is_array)
+        cfg_tree = jax.tree_util.tree_structure(cfg_arrays)
+        na, nc = len(self.array_at), cfg_tree.num_leaves
 
-        def run(*arrays):  # (launch velocities, status)
-            it = iter(arrays)
+        def run(*args):  # (launch velocities, status)
+            it = iter(args[:na])
             full = [next(it) if a else x for x, a in zip(all_leaves, is_array)]
             s, st = jax.tree_util.tree_unflatten(tree, full)
-            return _launch_impl(s, st, t_max, cfg, replay)
+            c = eqx.combine(jax.tree_util.tree_unflatten(cfg_tree, args[na : na + nc]), cfg_static)
+            return _launch_impl(s, st, args[-1], c, replay)
 
-        self.nested = jax.jit(lambda *arrays: _checked(*run(*arrays), replay))
+        self.nested = jax.jit(lambda *args: _checked(*run(*args), replay))
         options = _config.solve_compiler_options()
         self.compiled = jax.jit(run, compiler_options=options) if options else jax.jit(run)
 
+    @staticmethod
+    def key_of(all_leaves, tree, cfg_static, cfg_tree, replay):
+        """What the program is compiled for (None where it cannot be hashed): the structure of
+        `(stack, state)`, the static part of the configuration, `replay`, the compile options."""
+        options = _config.solve_compiler_options()
+        key = (tree, tuple(map(_leaf_key, all_leaves)), cfg_static, cfg_tree, replay,
+               None if options is None else tuple(sorted(options.items())))
+        try:
+            hash(key)
+        except TypeError:
+            return None
+        return key
+
+
+class _Launch:
+    """A `_Program` with the numbers of one set of checked options (the tolerances' arrays, `t_max`):
+    `prepare_launch`'s function, and `launch_velocity`'s repeated calls (`_LAUNCHES`). A call flattens its
+    arguments and runs the compiled program on their arrays (JAX's `jax.jit`), ~10 us of Python."""
+
+    def __init__(self, program: _Program, numbers: list, shapes: tuple, prepared_for: str):
+        self.program, self.numbers, self.shapes, self.prepared_for = program, numbers, shapes, prepared_for
+
+    @classmethod
+    def of(cls, stack: Stack, state: State, t_max, cfg: _SolveConfig, replay: bool) -> "_Launch":
+        """The launch of these (checked) arguments, on the program compiled for their structure (made on
+        the first use of that structure, `_PROGRAMS`)."""
+        all_leaves, tree = jax.tree_util.tree_flatten((stack, state))
+        cfg_arrays, cfg_static = eqx.partition(cfg, eqx.is_array)
+        key = _Program.key_of(all_leaves, tree, cfg_static, jax.tree_util.tree_structure(cfg_arrays), replay)
+        program = _PROGRAMS.pop(key, None) if key is not None else None  # (put back last: most recent)
+        if program is None:
+            program = _Program(stack, state, cfg, replay)
+        if key is not None:
+            _remember(_PROGRAMS, key, program, 64)
+        numbers = [jnp.asarray(x) for x in jax.tree_util.tree_leaves(cfg_arrays)] + [jnp.asarray(t_max)]
+        return cls(program, numbers, tuple(np.shape(all_leaves[i]) for i in program.array_at), _describe(stack))
+
     def run_leaves(self, lv: list) -> Array:
         """The launch velocities of the flattened `(stack, state)` `lv`, of the prepared structure."""
-        arrays = [lv[i] for i in self.array_at]
+        p = self.program
+        arrays = [lv[i] for i in p.array_at]
         for x in arrays:
             if isinstance(x, jax.core.Tracer):
-                return self.nested(*arrays)
-        return _checked(*self.compiled(*arrays))
+                return p.nested(*arrays, *self.numbers)
+        return _checked(*p.compiled(*arrays, *self.numbers))
 
     def __call__(self, stack: Stack, state: State) -> Array:
         """`launch(stack, state) -> (n,)` launch velocities (m/s); `ParameterError` for a stack or state of
         another structure, `SolverError` for a solve that does not end (`prepare_launch`)."""
+        p = self.program
         lv, tree = jax.tree_util.tree_flatten((stack, state))
-        if (tree != self.tree or tuple(getattr(lv[i], "shape", None) for i in self.array_at) != self.shapes
-                or [lv[i] for i in self.other_at] != self.others):
+        if (tree != p.tree or tuple(_shape(lv[i]) for i in p.array_at) != self.shapes
+                or [lv[i] for i in p.other_at] != p.others):
             _prepared_mismatch(stack, state, self.prepared_for)
         return self.run_leaves(lv)
+
+
+def _shape(x) -> tuple:
+    """`np.shape(x)`, in ~0.1 us for an array (~0.6 us through NumPy)."""
+    shape = getattr(x, "shape", None)
+    return np.shape(x) if shape is None else tuple(shape)
 
 
 def _prepared_mismatch(stack, state, prepared_for: str):

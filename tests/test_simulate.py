@@ -295,7 +295,7 @@ def test_prepared_launch_equals_launch_velocity_and_paper_eq_19():
 
 def test_a_repeated_launch_velocity_call_keeps_every_check(monkeypatch):
     """A repeated `launch_velocity` call of the same options on a stack of the same structure runs its
-    compiled solve without preparing it again (`simulation._PREPARED`). It must still give each design's
+    compiled solve without preparing it again (`simulation._LAUNCHES`). It must still give each design's
     own numbers (paper Eq 19, n = 2, e = 1, widely gapped, no gravity: 1e-8), refuse what the first call
     would refuse (a held chain; a state of another length), raise for a failed solve, and read a registry
     row replaced since (its numbers equal those of the replacement solver named directly)."""
@@ -326,6 +326,35 @@ def test_a_repeated_launch_velocity_call_keeps_every_check(monkeypatch):
     np.testing.assert_array_equal(after, np.asarray(hc.launch_velocity(*design([1.0, 0.3]), tolerances=loose,
                                                                        solver="dopri5")))
     assert not np.array_equal(after, before)
+
+
+def test_a_new_tolerance_or_an_option_written_another_way_compiles_nothing(monkeypatch):
+    """The tolerances and `t_max` are arguments of the compiled launch solve, and the programs are kept by
+    what is static about them (`simulation._PROGRAMS`): a new tolerance, the default tolerances written out,
+    `max_steps` as a NumPy integer, a solver name in capitals, a NumPy-scalar gravity and a prepared launch
+    with another `t_max` all run one compiled program per `replay` (launch_velocity's and prepare_launch's),
+    and give paper Eq 19 (n = 2, e = 1, widely gapped, no gravity) to 1e-6 at rtol 1e-8."""
+    from hertz_chain import simulation
+
+    monkeypatch.setattr(simulation, "_PROGRAMS", {})
+    monkeypatch.setattr(simulation, "_LAUNCHES", {})
+    law = Hertz(1e9)
+    stack = Stack(jnp.asarray([1.0, 0.3]), law, gravity=0.0)
+    state = at_impact(stack, 1.0, 0.01)
+    eq19 = 2 * (2 / (1 + 0.3)) - 1
+    calls = [dict(tolerances=Tolerances(rtol=r, atol=r, resolve_onsets=True)) for r in (1e-8, 1e-9, 1e-10)]
+    calls += [dict(tolerances=Tolerances(rtol=1e-8, atol=1e-8, resolve_onsets=True), max_steps=np.int64(16_384)),
+              dict(tolerances=Tolerances(rtol=1e-8, atol=1e-8, resolve_onsets=True), solver="TSIT5"),
+              dict(tolerances=Tolerances(rtol=np.float64(1e-8), atol=1e-8, resolve_onsets=True))]
+    for kw in calls:
+        assert float(hc.launch_velocity(stack, state, **kw)[-1]) == pytest.approx(eq19, rel=1e-6)
+    g0 = eqx.tree_at(lambda s: s.gravity, stack, np.float64(0.0))
+    assert float(hc.launch_velocity(g0, state, **calls[0])[-1]) == pytest.approx(eq19, rel=1e-6)
+    assert len(simulation._PROGRAMS) == 1
+    for t_max in (0.1, 0.2):
+        launch = hc.prepare_launch(stack, state, t_max=t_max, **calls[0])
+        assert float(launch(stack, state)[-1]) == pytest.approx(eq19, rel=1e-6)
+    assert len(simulation._PROGRAMS) == 2
 
 
 def test_launch_velocity_raises_where_the_cascade_does_not_end():
