@@ -455,7 +455,8 @@ def markdown(data: dict) -> str:
           f"Machine: {mc['cpu']}, {mc['cores']} cores ({mc['xla_devices']} XLA CPU devices), load average at start "
           f"{mc['loadavg_start']:.2f} (timings are noisy: other work shared the machine; compare ratios within this run). "
           f"Python {mc['python']}, jax {mc['jax']}, jaxlib {mc['jaxlib']}, diffrax {mc['diffrax']}, equinox "
-          f"{mc['equinox']}, scipy {mc['scipy']}, numpy {mc['numpy']}.", ""]
+          f"{mc['equinox']}, scipy {mc['scipy']}, numpy {mc['numpy']}." + (
+              f" Batches: {mc['batch_rerun']}." if mc.get("batch_rerun") else ""), ""]
 
     L += ["## Targets", "", "| target | goal | measured | met | how |", "|---|---|---|---|---|"]
     for t in data["targets"]:
