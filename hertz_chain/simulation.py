@@ -748,8 +748,9 @@ def prepare_launch(
     **Returns:** the function `launch(stack, state)`.
 
     **Raises:** `ParameterError` for bad options (here), and, from `launch`, for a stack or state of
-    another structure; from `launch`, a solve that does not end raises `SolverError` (under the caller's
-    own `jit`, `grad` or `vmap`, a run-time error through `eqx.error_if`), as `launch_velocity` does.
+    another structure or a chain held by an end force; from `launch`, a solve that does not end raises
+    `SolverError` (under the caller's own `jit`, `grad` or `vmap`, a run-time error through
+    `eqx.error_if`), as `launch_velocity` does.
     """
     t_max_, cfg = _launch_config(stack, state, solver, tolerances, t_max, max_steps, "reverse", until)
     return _Launch.of(stack, state, t_max_, cfg, False).__call__
@@ -772,6 +773,10 @@ class _Program:
         self.other_at = [i for i, a in enumerate(is_array) if not a]
         self.others = [all_leaves[i] for i in self.other_at]
         self.tree = tree
+        # the leaf of the stack's end force (`Stack.held`, checked by a prepared function's calls)
+        paths = [p for p, _ in jax.tree_util.tree_flatten_with_path((stack, state))[0]]
+        self.end_force_at = next((i for i, p in enumerate(paths) if len(p) == 2 and getattr(p[1], "name", None)
+                                  == "end_force" and i in self.array_at), None)
         cfg_arrays, cfg_static = eqx.partition(cfg, eqx.is_array)
         cfg_tree = jax.tree_util.tree_structure(cfg_arrays)
         na, nc = len(self.array_at), cfg_tree.num_leaves
@@ -841,6 +846,11 @@ class _Launch:
         if (tree != p.tree or tuple(_shape(lv[i]) for i in p.array_at) != self.shapes
                 or [lv[i] for i in p.other_at] != p.others):
             _prepared_mismatch(stack, state, self.prepared_for)
+        at = p.end_force_at
+        if at is not None and not isinstance(lv[at], jax.core.Tracer) and np.asarray(lv[at]).any():
+            raise ParameterError("stack", "a chain held by an end force", "a free chain: the prepared solve runs "
+                                 "until the cascade ends, which a held chain never does; use simulate(..., "
+                                 "until='t_max')")
         return self.run_leaves(lv)
 
 

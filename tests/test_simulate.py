@@ -313,6 +313,8 @@ def test_a_repeated_launch_velocity_call_keeps_every_check(monkeypatch):
         assert float(v[-1]) == pytest.approx(2 * (2 / (1 + r)) - 1, rel=1e-8)  # Eq 19
     with pytest.raises(ParameterError, match="until"):  # held by an end force: the same structure
         hc.launch_velocity(*design([1.0, 0.3], end_force=5.0), tolerances=tol)
+    with pytest.raises(ParameterError, match="held"):  # and a prepared function refuses it too
+        hc.prepare_launch(*design([1.0, 0.3]), tolerances=tol)(*design([1.0, 0.3], end_force=5.0))
     stack, _ = design([1.0, 0.3])
     with pytest.raises(ParameterError, match=r"positions \(3,\)"):
         hc.launch_velocity(stack, State([0.0, 0.01, 0.02], [-1.0] * 3), tolerances=tol)
