@@ -825,7 +825,12 @@ class _Launch:
         if program is None:
             program = _Program(stack, state, cfg, replay)
         if key is not None:
+            before = len(_PROGRAMS)
             _remember(_PROGRAMS, key, program, 64)
+            if len(_PROGRAMS) <= before:  # an old program was dropped: the launches on it go too (memory)
+                live = {id(p) for p in _PROGRAMS.values()}
+                for k in [k for k, v in list(_LAUNCHES.items()) if id(v[1].program) not in live]:
+                    _LAUNCHES.pop(k, None)
         numbers = [jnp.asarray(x) for x in jax.tree_util.tree_leaves(cfg_arrays)] + [jnp.asarray(t_max)]
         return cls(program, numbers, tuple(np.shape(all_leaves[i]) for i in program.array_at), _describe(stack))
 
