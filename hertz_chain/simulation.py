@@ -651,7 +651,7 @@ def launch_velocity(
 # options again (~170 us with `eqx.filter_jit`'s partition and hashing of the configuration). An option
 # written another way, or a new tolerance, misses here and finds its compiled program in `_PROGRAMS`.
 _LAUNCHES: dict = {}
-# the compiled programs, by what is static about them (`_Program.key`): the tolerances and `t_max` are
+# the compiled programs, by what is static about them (`_Program.key_of`): the tolerances and `t_max` are
 # arguments, so a new tolerance compiles nothing
 _PROGRAMS: dict = {}
 
