@@ -577,7 +577,8 @@ def _guard_forward_jvp(primals, tangents):
     return _guard_forward(v, bad), eqx.error_if(tangents[0] * jnp.where(bad, jnp.nan, 1.0), bad, _NOT_ENDED)
 
 
-# `replay` is a Python bool: static. At the top level compiled with `_config.solve_compiler_options()` (JAX
+# `replay` is a Python bool: static. Used under the caller's trace (the top level runs a `_Launch`) and for
+# options that cannot be hashed. At the top level compiled with `_config.solve_compiler_options()` (JAX
 # takes options only there); not kept on disk by `_export` as `simulate`'s solve is: the exported call's checks cost
 # ~0.3 ms per call, more than this function's whole fixed cost (JAX's compilation cache still keeps it)
 _launch_with = jit_per_options(_launch_impl)
@@ -632,17 +633,21 @@ def launch_velocity(
     """
     replay = isinstance(adjoint, str) and adjoint == "reverse"
     key = None
-    if t_max is None and _top_level((stack, state)):  # a repeated call: its compiled solve (`_Launch`)
+    top = _top_level((stack, state))
+    if top:  # at the top level: the compiled program of this structure (`_Launch`)
         lv, tree = jax.tree_util.tree_flatten((stack, state))
-        key = _launch_key(lv, tree, solver, tolerances, max_steps, adjoint, until)
-        hit = _LAUNCHES.get(key) if key is not None else None
-        if hit is not None and hit[0] is _solver_row(solver) and not stack.held:
-            return hit[1].run_leaves(lv)
+        if t_max is None:  # a repeated call finds its launch with its options unchecked
+            key = _launch_key(lv, tree, solver, tolerances, max_steps, adjoint, until)
+            hit = _LAUNCHES.get(key) if key is not None else None
+            if hit is not None and hit[0] is _solver_row(solver) and not stack.held:
+                return hit[1].run_leaves(lv)
     t_max_, cfg = _launch_config(stack, state, solver, tolerances, t_max, max_steps, adjoint, until)
-    if key is not None:
-        launch = _Launch.of(stack, state, t_max_, cfg, replay)
-        _remember(_LAUNCHES, key, (_solver_row(solver), launch), 256)
+    launch = _Launch.of(stack, state, t_max_, cfg, replay, shared=True) if top else None
+    if launch is not None:
+        if key is not None:
+            _remember(_LAUNCHES, key, (_solver_row(solver), launch), 256)
         return launch.run_leaves(lv)
+    # traced (the caller's jit, grad, vmap), or options that cannot be hashed
     return _checked(*_launch_jit(stack, state, t_max_, cfg, replay), replay)
 
 
@@ -815,12 +820,16 @@ class _Launch:
         self.program, self.numbers, self.shapes, self.prepared_for = program, numbers, shapes, prepared_for
 
     @classmethod
-    def of(cls, stack: Stack, state: State, t_max, cfg: _SolveConfig, replay: bool) -> "_Launch":
+    def of(cls, stack: Stack, state: State, t_max, cfg: _SolveConfig, replay: bool,
+           shared: bool = False) -> "_Launch | None":
         """The launch of these (checked) arguments, on the program compiled for their structure (made on
-        the first use of that structure, `_PROGRAMS`)."""
+        the first use of that structure, `_PROGRAMS`). `shared`: None where the program cannot be kept
+        (options that cannot be hashed) instead of a program of its own."""
         all_leaves, tree = jax.tree_util.tree_flatten((stack, state))
         cfg_arrays, cfg_static = eqx.partition(cfg, eqx.is_array)
         key = _Program.key_of(all_leaves, tree, cfg_static, jax.tree_util.tree_structure(cfg_arrays), replay)
+        if key is None and shared:
+            return None
         program = _PROGRAMS.pop(key, None) if key is not None else None  # (put back last: most recent)
         if program is None:
             program = _Program(stack, state, cfg, replay)

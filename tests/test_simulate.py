@@ -333,8 +333,9 @@ def test_a_repeated_launch_velocity_call_keeps_every_check(monkeypatch):
 def test_a_new_tolerance_or_an_option_written_another_way_compiles_nothing(monkeypatch):
     """The tolerances and `t_max` are arguments of the compiled launch solve, and the programs are kept by
     what is static about them (`simulation._PROGRAMS`): a new tolerance, the default tolerances written out,
-    `max_steps` as a NumPy integer, a solver name in capitals, a NumPy-scalar gravity and a prepared launch
-    with another `t_max` all run one compiled program per `replay` (launch_velocity's and prepare_launch's),
+    `max_steps` as a NumPy integer, a solver name in capitals, a NumPy-scalar gravity, a given `t_max` and a
+    prepared launch with another `t_max` all run one compiled program per `replay` (launch_velocity's and
+    prepare_launch's),
     and give paper Eq 19 (n = 2, e = 1, widely gapped, no gravity) to 1e-6 at rtol 1e-8."""
     from hertz_chain import simulation
 
@@ -352,6 +353,8 @@ def test_a_new_tolerance_or_an_option_written_another_way_compiles_nothing(monke
         assert float(hc.launch_velocity(stack, state, **kw)[-1]) == pytest.approx(eq19, rel=1e-6)
     g0 = eqx.tree_at(lambda s: s.gravity, stack, np.float64(0.0))
     assert float(hc.launch_velocity(g0, state, **calls[0])[-1]) == pytest.approx(eq19, rel=1e-6)
+    for t_max in (0.1, 0.2):  # (the cascade ends at ~0.02 s: 1 cm gaps at 1 m/s)
+        assert float(hc.launch_velocity(stack, state, t_max=t_max, **calls[0])[-1]) == pytest.approx(eq19, rel=1e-6)
     assert len(simulation._PROGRAMS) == 1
     for t_max in (0.1, 0.2):
         launch = hc.prepare_launch(stack, state, t_max=t_max, **calls[0])
