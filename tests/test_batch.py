@@ -190,3 +190,24 @@ def test_materialised_forces_are_the_identity_with_their_derivatives():
         np.testing.assert_array_equal(tangent, 0.0 * c)
         hlo = jax.jit(jax.vmap(materialised)).lower(f, g).compile().as_text()
         assert (" dot(" in hlo) == (2 * n <= MAX_WIDTH), n
+
+
+@pytest.mark.parametrize("n", [1, 5, 16, 17])
+def test_the_cascade_rules_running_sums_are_numpys_cumsum(n):
+    """`_tracking._running_sums` (the cascade rule's running sums: a chain of additions under `jax.vmap`
+    for at most `UNROLLED_SUMS` masses, `cumsum` otherwise and in a single solve) gives NumPy's `cumsum`
+    bit for bit (same order of summation), batched, twice batched and unbatched, and the derivatives of a
+    running sum (the lower-triangular matrix of ones)."""
+    from hertz_chain._tracking import UNROLLED_SUMS, _running_sums
+
+    rng = np.random.default_rng(n)
+    x = rng.normal(size=(2, 9, 6, n)) * np.logspace(-8, 8, n)  # summands of very different sizes
+    ref = np.cumsum(x, axis=-1)
+    np.testing.assert_array_equal(jax.jit(jax.vmap(_running_sums))(x[0]), ref[0])
+    np.testing.assert_array_equal(jax.jit(jax.vmap(jax.vmap(_running_sums)))(x), ref)
+    np.testing.assert_array_equal(jax.jit(_running_sums)(x[0, 0]), ref[0, 0])
+    tri = np.tril(np.ones((n, n)))  # d(sum_{j<=k} x_j)/dx_i = [i <= k]
+    np.testing.assert_array_equal(jax.vmap(jax.jacfwd(_running_sums))(x[0, :, 0]), np.broadcast_to(tri, (9, n, n)))
+    np.testing.assert_array_equal(jax.vmap(jax.jacrev(_running_sums))(x[0, :, 0]), np.broadcast_to(tri, (9, n, n)))
+    hlo = jax.jit(jax.vmap(_running_sums)).lower(x[0]).compile().as_text()
+    assert ("reduce-window" in hlo) == (n > UNROLLED_SUMS and n > 1), n
