@@ -138,6 +138,14 @@ def _not_traced(fn: str, stack, state) -> None:
                              "prepare_launch's function")
 
 
+def _check_one_design(stack) -> None:
+    """`ParameterError` for a batch of designs (`stack_designs`) given where one design is solved."""
+    if isinstance(stack, Stack) and len(_shape(stack.masses)) != 1:
+        raise ParameterError("stack", f"a batch of designs (masses of shape {_shape(stack.masses)})",
+                             "one design (masses of shape (n,)); solve a batch with simulate_batch, or "
+                             "jax.vmap over launch_velocity")
+
+
 def _check_state_shape(stack: Stack, state: State) -> None:
     """`ParameterError` unless the state's positions and velocities have the masses' shape."""
     if np.shape(state.positions) != np.shape(stack.masses) or np.shape(state.velocities) != np.shape(stack.masses):
@@ -264,6 +272,7 @@ def simulate(
     equinox's `EQX_ON_ERROR=raise` or `nan`), so a new process skips both.
     """
     _not_traced("simulate", stack, state)
+    _check_one_design(stack)
     ts, t_max, cfg = _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, until=until)
     out = _solve(stack, state, ts, t_max, cfg)
     out["scales"] = Scales(**out["scales"])
@@ -721,6 +730,7 @@ def _launch_config(stack, state, solver, tolerances, t_max, max_steps, adjoint, 
     tolerances = tolerances or Tolerances(rtol=1e-11, atol=1e-11, resolve_onsets=True)
     if until not in ("cascade", "launch"):
         raise ParameterError("until", until, "'cascade' or 'launch' (a launch solve stops at the cascade's end)")
+    _check_one_design(stack)
     _, t_max, cfg = _prepare(stack, state, None, t_max, solver, tolerances, max_steps, adjoint, save_steps=False,
                              until=until)
     return t_max, cfg
@@ -877,6 +887,7 @@ def _shape(x) -> tuple:
 def _prepared_mismatch(stack, state, prepared_for: str):
     """Raise `ParameterError` for a call of `prepare_launch`'s function on a stack or state of another
     structure (its masses' and state's shapes first, then the structure)."""
+    _check_one_design(stack)
     if isinstance(stack, Stack) and isinstance(state, State):
         _check_state_shape(stack, state)
     raise ParameterError("stack, state", _describe(stack) if isinstance(stack, Stack) else type(stack).__name__,

@@ -486,6 +486,18 @@ def _stack(n_masses: int):
     return hc.Stack([1.0] * n_masses, hc.Hertz(1e9), gravity=0.0)
 
 
+def _batch(n_masses: int):
+    """Two designs of `n_masses` stacked (`stack_designs`), and their states."""
+    import jax
+    import numpy as np
+
+    import hertz_chain as hc
+
+    stacks = [hc.Stack([s, 0.5 * s][:n_masses], hc.Hertz(1e9), gravity=0.0) for s in (1.0, 1.2)]
+    states = [hc.at_impact(st, 1.0) for st in stacks]
+    return hc.stack_designs(stacks), jax.tree.map(lambda *x: np.stack(x), *states)
+
+
 API_ROWS = [
     ("parse_quantity_tower", lambda: parse_quantity("10**10**10 kg", "mass", "m"), StackFileError, "m"),
     ("parse_quantity_caret", lambda: parse_quantity("2^1000 kg", "mass", "m"), StackFileError, "m"),
@@ -520,6 +532,14 @@ API_ROWS = [
     ("simulate_t_max_array", lambda: __import__("hertz_chain").simulate(
         _stack(2), __import__("hertz_chain").at_impact(_stack(2), 1.0), t_max=[1.0, 2.0]), ParameterError,
      "t_max = 'shape (2,)' is invalid: one time"),
+    # a batch of designs (`stack_designs`) where one design is solved: it was a bare TypeError/ValueError
+    *[(f"{name}_of_a_batch", call, ParameterError, "stack = 'a batch of designs (masses of shape (2, 2))'")
+      for name, call in [
+          ("launch_velocity", lambda: __import__("hertz_chain").launch_velocity(*_batch(2))),
+          ("simulate", lambda: __import__("hertz_chain").simulate(*_batch(2))),
+          ("prepare_launch", lambda: __import__("hertz_chain").prepare_launch(*_batch(2))),
+          ("prepared_function", lambda: __import__("hertz_chain").prepare_launch(_stack(2), __import__(
+              "hertz_chain").at_impact(_stack(2), 1.0))(*_batch(2)))]],
     ("check_output_missing", lambda: _paths.check_output_path("/nonexistent/r.nc", "--output", (".nc",), False),
      OutputPathError, "--output"),
     ("check_output_suffix", lambda: _paths.check_output_path("r.txt", "--output", (".nc",), False),
