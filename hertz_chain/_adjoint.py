@@ -1,5 +1,6 @@
-"""Reverse mode by replaying the accepted steps: `_replayed_solve`, a discrete adjoint over the saved
-accepted states (`hertz_chain.simulation` module docstring, "Gradients")."""
+"""Derivatives by replaying the accepted steps: `_replayed_solve`, reverse mode, a discrete adjoint over
+the saved accepted states, and `_forward_replayed_solve`, forward mode, the same discrete derivative swept
+forward (`hertz_chain.simulation` module docstring, "Gradients")."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import diffrax as dfx
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from . import _config  # noqa: F401  (float64)
 from ._scaling import FieldArgs
@@ -157,17 +159,15 @@ class _Replay(eqx.Module):
         kind = jnp.where(closes, 2, jnp.where(window, 1, jnp.where(jnp.any(kink, axis=1), 3, 0)))
         return kind, j, jnp.argmax(kink, axis=1), star, F
 
-    def vjp(self, cotangents, dyn, y0, t_star, t0, t1, kind, j, jr, f0, f1):
-        """The step's vector-Jacobian product: `cotangents = (lambda_y, lambda_t*)` of `(y', t*')` to those
-        of `(dyn, y0, t*)`. The kind of step (class docstring) comes from `classify`, outside the
-        differentiation, so a plain step costs what it did before onsets were treated; `f0`, `f1`: the
-        unclamped forces at the step's ends."""
+    def _branches(self, t0, t1, j, jr, f0, f1) -> list:
+        """The replays `(dyn, y, t*) -> (y', t*')` of the step `t0 -> t1`, one per kind (class docstring;
+        only the plain one without `split`): `j`, `jr`, `f0`, `f1` from `classify`."""
 
         def plain(d, y, ts):
             return self._solver_step(dfx.ODETerm(_scaled_field), y, t0, t1, self._args(d)), ts
 
         if not self.split:
-            return jax.vjp(plain, dyn, y0, t_star)[1](cotangents)
+            return [plain]
 
         def in_window(d, y, ts):
             sa, sb = (jnp.maximum(t - ts, 0.0) ** (1.0 / _ONSET_POWER) for t in (t0, t1))
@@ -187,8 +187,25 @@ class _Replay(eqx.Module):
             ta = t0 + jnp.clip(th, 0.0, 1.0) * h
             return self._solver_step(term, self._solver_step(term, y, t0, ta, args), ta, t1, args), ts
 
-        return jax.lax.switch(kind, [lambda fn=fn: jax.vjp(fn, dyn, y0, t_star)[1](cotangents)
-                                     for fn in (plain, in_window, onset, release)])
+        return [plain, in_window, onset, release]
+
+    def vjp(self, cotangents, dyn, y0, t_star, t0, t1, kind, j, jr, f0, f1):
+        """The step's vector-Jacobian product: `cotangents = (lambda_y, lambda_t*)` of `(y', t*')` to those
+        of `(dyn, y0, t*)`. The kind of step (class docstring) comes from `classify`, outside the
+        differentiation, so a plain step costs what it did before onsets were treated; `f0`, `f1`: the
+        unclamped forces at the step's ends."""
+        fns = self._branches(t0, t1, j, jr, f0, f1)
+        if len(fns) == 1:
+            return jax.vjp(fns[0], dyn, y0, t_star)[1](cotangents)
+        return jax.lax.switch(kind, [lambda fn=fn: jax.vjp(fn, dyn, y0, t_star)[1](cotangents) for fn in fns])
+
+    def jvp(self, tangents, dyn, y0, t_star, t0, t1, kind, j, jr, f0, f1):
+        """The step's Jacobian-vector product: `tangents = (dyn_dot, y_dot, t*_dot)` of `(dyn, y0, t*)` to
+        those of `(y', t*')` (the forward counterpart of `vjp`: the same replays)."""
+        fns = self._branches(t0, t1, j, jr, f0, f1)
+        if len(fns) == 1:
+            return jax.jvp(fns[0], (dyn, y0, t_star), tangents)[1]
+        return jax.lax.switch(kind, [lambda fn=fn: jax.jvp(fn, (dyn, y0, t_star), tangents)[1] for fn in fns])
 
     def unclamped(self, dyn, y):
         """Every interface's unclamped force (`Stack.unclamped_forces`, N) at a scaled state."""
@@ -217,18 +234,51 @@ def _replayed_solve(diff, t1s, scale, T, cfg: _SolveConfig) -> dict:
     return _solve_record(_diffeqsolve(stack, y0s, t1s, scale, T, None, cfg, history=False, audit=False))
 
 
-@_replayed_solve.def_fwd
-def _replay_fwd(perturbed, diff, t1s, scale, T, cfg: _SolveConfig):
-    del perturbed
+def _history(diff, t1s, scale, T, cfg: _SolveConfig):
+    """The solve with its history of accepted steps, not landing onsets (the replay takes its own steps
+    there): `(core, (ts, ys, idx, valid))`, `core` its `_solve_record`; per interface, `idx` the history
+    index of the point recorded in `_Contacts.rows` (the first accepted point after its last contact),
+    found by its time (the same float), and `valid` whether there is one."""
     stack, y0s = diff
     sol = _diffeqsolve(stack, y0s, t1s, scale, T, None, cfg, history=True, audit=False, land=False)
     core = _solve_record(sol)
-    # per interface: the history index of the point recorded in `_Contacts.rows` (the first accepted
-    # point after its last contact), found by its time (the same float), and whether there is one
     c = core["contacts"]
     match = sol.ts[0][None, :] == c.rows[:, T_OUT : T_OUT + 1]
     idx, valid = jnp.argmax(match, axis=1), (c.rows[:, T_IN] >= 0) & ~c.now & jnp.any(match, axis=1)
     return core, (sol.ts[0], sol.ys[0], idx, valid)
+
+
+def _replay_of(stack, scale, T, cfg: _SolveConfig):
+    """`(dyn, replay)`: the differentiable part of `stack` and its `_Replay`."""
+    dyn, static = eqx.partition(stack, eqx.is_inexact_array)
+    return dyn, _Replay(static, scale, T, cfg.solver, stack.interface_mask(), jnp.asarray(stack.clamped()),
+                        stack.n, split=not _smooth_onsets(stack))
+
+
+def _kinds(replay: _Replay, dyn, hist_t, ys, N):
+    """`replay.classify`, or every step plain where nothing is split."""
+    if replay.split:
+        return replay.classify(dyn, hist_t, ys, N)
+    zeros = jnp.zeros(hist_t.shape[0] - 1, int)
+    return zeros, zeros, zeros, jnp.full(hist_t.shape[0] - 1, -jnp.inf), jnp.zeros((hist_t.shape[0], replay.n))
+
+
+def _at_rows(stack, scale, n3):
+    """The state-dependent columns of `_Contacts.rows` (overlap, its rate, the lower and upper bodies'
+    velocities) of each interface `j` at the scaled state `Y[j]` (linear in it)."""
+
+    def at_rows(Y):
+        x, v, _ = stack.split(Y[:, :n3] * scale[None, :])
+        v_lo = jnp.concatenate([jnp.zeros(1, v.dtype), jnp.diagonal(v, offset=-1)])
+        return (jnp.diagonal(stack.overlaps(x)), jnp.diagonal(stack.overlap_rates(v)), v_lo, jnp.diagonal(v))
+
+    return at_rows
+
+
+@_replayed_solve.def_fwd
+def _replay_fwd(perturbed, diff, t1s, scale, T, cfg: _SolveConfig):
+    del perturbed
+    return _history(diff, t1s, scale, T, cfg)
 
 
 @_replayed_solve.def_bwd
@@ -252,27 +302,14 @@ def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _SolveConfig)
         ct_hist = ct_hist.at[N].add(g["y_fin"])
     rows_ct = g["contacts"].rows
     if rows_ct is not None:  # overlap, rate and velocities at the recorded point: linear in that state
-        def at_rows(Y):
-            x, v, _ = stack.split(Y[:, :n3] * scale[None, :])
-            v_lo = jnp.concatenate([jnp.zeros(1, v.dtype), jnp.diagonal(v, offset=-1)])
-            return (jnp.diagonal(stack.overlaps(x)), jnp.diagonal(stack.overlap_rates(v)), v_lo,
-                    jnp.diagonal(v))
-
-        _, vjp = jax.vjp(at_rows, hist_y[idx])
+        _, vjp = jax.vjp(_at_rows(stack, scale, n3), hist_y[idx])
         (ct_Y,) = vjp((rows_ct[:, 2], rows_ct[:, 3], rows_ct[:, 4], rows_ct[:, 5]))
         ct_hist = ct_hist.at[idx].add(jnp.where(valid[:, None], ct_Y, 0.0))
-    dyn, static = eqx.partition(stack, eqx.is_inexact_array)
-    replay = _Replay(static, scale, T, cfg.solver, stack.interface_mask(), jnp.asarray(stack.clamped()), stack.n,
-                     split=not _smooth_onsets(stack))
+    dyn, replay = _replay_of(stack, scale, T, cfg)
     # The onset proxies (`resolve_onsets`, entries state_size:) feed nothing back into the motion and no output
     # depends on them: replay the physical equations only (the same arithmetic, component by component).
     ct_hist, ys = ct_hist[:, :n3], hist_y[:, :n3]
-
-    if replay.split:
-        kinds, js, jrs, stars, F = replay.classify(dyn, hist_t, ys, N)
-    else:
-        kinds = js = jrs = jnp.zeros(hist_t.shape[0] - 1, int)
-        stars, F = jnp.full(hist_t.shape[0] - 1, -jnp.inf), jnp.zeros((hist_t.shape[0], stack.n))
+    kinds, js, jrs, stars, F = _kinds(replay, dyn, hist_t, ys, N)
 
     def body(i, carry):
         lam, lam_star, acc = carry
@@ -283,3 +320,58 @@ def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _SolveConfig)
 
     lam, _, acc = jax.lax.fori_loop(0, N, body, (ct_hist[N], jnp.zeros(()), jax.tree.map(jnp.zeros_like, dyn)))
     return acc, jnp.zeros_like(y0s).at[:n3].set(lam)
+
+
+# ==================================================================== forward mode: replay the accepted steps
+@eqx.filter_custom_jvp
+def _forward_replayed_solve(diff, t1s, scale, T, cfg: _SolveConfig) -> dict:
+    """`_solve_record` of the solve from `diff = (stack, y0s)`, differentiable in forward mode
+    (`jax.jvp`, `jax.jacfwd`; `launch_velocity(adjoint="forward")`) by replaying the accepted steps
+    forward (`_forward_jvp`): the tangent of the same discrete solve as the reverse mode's
+    (`_replayed_solve`), onsets and releases split out of the steps as there. Undifferentiated, the lean
+    solve."""
+    stack, y0s = diff
+    return _solve_record(_diffeqsolve(stack, y0s, t1s, scale, T, None, cfg, history=False, audit=False))
+
+
+@_forward_replayed_solve.def_jvp
+def _forward_jvp(primals, tangents):
+    """Forward sweep over the accepted steps `y_k = Phi(y_{k-1}; t_{k-1}, t_k, stack)` with the step times
+    frozen (as `_replay_bwd`): `y_dot_k = (dPhi/dy) y_dot_{k-1} + (dPhi/dstack) stack_dot`, each step's
+    Jacobian-vector product by `jax.jvp` of its replay (`_Replay.jvp`; the latest onset time `t*` is
+    carried with the tangent). The outputs' tangents are those the reverse mode's cotangents reach: the
+    final state's physical part, and per interface the overlap, its rate and the two bodies' velocities
+    at the first accepted point after its last contact; every other output has a zero tangent (the step
+    times, the statuses and counts carry no derivative)."""
+    diff, t1s, scale, T, cfg = primals
+    (t_stack, t_y0s) = tangents[0]
+    stack, y0s = diff
+    core, (hist_t, hist_y, idx, valid) = _history(diff, t1s, scale, T, cfg)
+    n3 = stack.state_size
+    N = jnp.sum(jnp.isfinite(hist_t)) - 1  # accepted steps: rows 0..N of the history are finite
+    dyn, replay = _replay_of(stack, scale, T, cfg)
+    # a parameter that is not differentiated has no tangent (None): a zero one
+    t_dyn = jax.tree.map(lambda p, t: jnp.zeros_like(p) if t is None else t, dyn,
+                         eqx.filter(t_stack, eqx.is_array) if t_stack is not None else jax.tree.map(lambda _: None, dyn),
+                         is_leaf=lambda x: x is None)
+    ty0 = jnp.zeros(n3, y0s.dtype) if t_y0s is None else t_y0s[:n3]
+    ys = hist_y[:, :n3]
+    kinds, js, jrs, stars, F = _kinds(replay, dyn, hist_t, ys, N)
+    at_idx = jnp.where((idx == 0)[:, None], ty0[None, :], 0.0)  # each interface's recorded point's tangent
+
+    def body(k, carry):
+        ty, tstar, at_idx = carry
+        ty, tstar = replay.jvp((t_dyn, ty, tstar), dyn, ys[k - 1], stars[k - 1], hist_t[k - 1], hist_t[k],
+                               kinds[k - 1], js[k - 1], jrs[k - 1], F[k - 1], F[k])
+        return ty, tstar, jnp.where((idx == k)[:, None], ty[None, :], at_idx)
+
+    ty, _, at_idx = jax.lax.fori_loop(1, N + 1, body, (ty0, jnp.zeros(()), at_idx))
+    t_core = jax.tree.map(lambda x: jnp.zeros_like(x) if jnp.issubdtype(x.dtype, jnp.inexact)
+                          else np.zeros(x.shape, jax.dtypes.float0), core)
+    t_core["y_fin"] = jnp.zeros_like(core["y_fin"]).at[:n3].set(ty)
+    _, cols = jax.jvp(_at_rows(stack, scale, n3), (hist_y[idx][:, :n3],), (at_idx,))
+    rows = t_core["contacts"].rows
+    for c, col in zip(range(2, 6), cols):
+        rows = rows.at[:, c].set(jnp.where(valid, col, 0.0))
+    t_core["contacts"] = eqx.tree_at(lambda c: c.rows, t_core["contacts"], rows)
+    return core, t_core

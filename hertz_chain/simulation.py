@@ -68,12 +68,13 @@ before JAX starts, `HERTZ_CHAIN_CPU_DEVICES` overrides, a choice the user made f
 CPU, are solved in pieces of `CPU_PIECE` by a thread per core (`_solve_pieces`).
 
 **Gradients.** Discretise-then-optimise through the solver: `launch_velocity` differentiates the
-discrete solve, forward (`adjoint="forward"`, `jax.jacfwd`) or reverse (`"reverse"`, `jax.grad`, by
-replaying the accepted steps, with contact onsets and the clamp's releases split out of them so that
-the derivative sees how they move: docs/solver-defaults.md, "Onsets and releases in the replay"). The
-derivative is as accurate as the solve's tolerance, no better: reverse mode within 2e-6 of central
-differences for every law of the registry's five (Hertz, Hunt–Crossley, Tsuji, Kelvin–Voigt,
-viscoelastic) with gaps or touching, at the default 1e-11; forward mode has no onset treatment.
+discrete solve, forward (`adjoint="forward"`, `jax.jacfwd`) or reverse (`"reverse"`, `jax.grad`), both by
+replaying the accepted steps (forward or backward), with contact onsets and the clamp's releases split
+out of them so that the derivative sees how they move: docs/solver-defaults.md, "Onsets and releases in
+the replay"; the two modes give the same discrete derivative. The derivative is as accurate as the
+solve's tolerance, no better: within 2e-6 of central differences in the masses, stiffnesses and
+restitutions for every law of the registry's five (Hertz, Hunt–Crossley, Tsuji, Kelvin–Voigt,
+viscoelastic) with gaps or touching, at the default 1e-11.
 
 The reasoning behind these defaults, with the measurements that decided them, is the developer page
 `docs/solver-defaults.md`.
@@ -91,7 +92,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike
 
 from . import _config  # float64; SOLVE_COMPILER_OPTIONS
-from ._adjoint import _replayed_solve
+from ._adjoint import _forward_replayed_solve, _replayed_solve
 from ._export import _top_level, jit_per_options
 from ._results import BatchSolution, Solution, Trajectory, _to_solution
 from ._scaling import Scales, _scales  # noqa: F401  (`_scales`: the benchmarks use it)
@@ -527,12 +528,15 @@ def simulate_batch(
     )
 
 
-def _launch_impl(stack, state, t_max, cfg, replay: bool):
-    """The launch velocities and the status of one solve (`launch_velocity`, unchecked: `_checked`)."""
+def _launch_impl(stack, state, t_max, cfg, replay):
+    """The launch velocities and the status of one solve (`launch_velocity`, unchecked: `_checked`).
+    `replay`: `"reverse"` or `"forward"` (the replayed derivatives, `_adjoint`), or False (a diffrax
+    adjoint's)."""
     if replay:
         sc, scale, y0s, t1s = _setup(stack, state, t_max, cfg)
         frozen = jax.lax.stop_gradient((t1s, scale, sc.time))  # the end time and the scales carry no gradient
-        out = _launch_outputs(stack, sc, scale, _replayed_solve((stack, y0s), *frozen, cfg))
+        solve = _replayed_solve if replay == "reverse" else _forward_replayed_solve
+        out = _launch_outputs(stack, sc, scale, solve((stack, y0s), *frozen, cfg))
     else:
         out = _solve_impl(stack, state, None, t_max, cfg, launch_only=True)
     return out["launch_velocities"], out["status"]
@@ -545,7 +549,7 @@ _NOT_ENDED = ("hertz_chain.launch_velocity: the cascade did not end (t_max or ma
 _LAST_ENDED = int(Status.COMPLETE_WITH_REBOUNDS)
 
 
-def _checked(v, status, replay: bool = False):
+def _checked(v, status, replay=False):
     """`v`, or an error where the solve did not end: `SolverError` when called on arrays, a run-time
     error of the caller's compiled function under a trace (`eqx.error_if`). Kept out of `_launch_jit`:
     a host callback would keep the compiled solve out of JAX's persistent compilation cache.
@@ -560,7 +564,7 @@ def _checked(v, status, replay: bool = False):
             raise SolverError(_NOT_ENDED)
         return v
     bad = status > _LAST_ENDED
-    return _guard_reverse(v, bad) if replay else _guard_forward(v, bad)
+    return _guard_reverse(v, bad) if replay == "reverse" else _guard_forward(v, bad)
 
 
 @jax.custom_vjp
@@ -622,11 +626,13 @@ def launch_velocity(
     where a contact closes. The reverse mode (`adjoint="reverse"`) splits every onset and every release of
     a clamped contact out of the replayed steps and replays the steps right after an onset in
     `s = (t - t*)^(1/4)` (module docstring), and matches central differences to 2e-6 with gaps or
-    touching (`benchmarks/optimize.md`); `adjoint="forward"` and diffrax's adjoints do not, and are off by
-    up to order 1 with gaps for those laws.
+    touching (`benchmarks/optimize.md`); so does `adjoint="forward"`, which replays the same steps forward
+    (the same discrete derivative); diffrax's adjoints do not, and are off by up to order 1 with gaps for
+    those laws.
 
     `adjoint`: `"reverse"` (default; `jax.grad` by replaying the accepted steps, module docstring;
-    reverse mode only), `"forward"` (`jax.jacfwd`, `jax.jvp`), or a diffrax adjoint, e.g.
+    reverse mode only: `jax.jacfwd` of it raises `ParameterError` naming `"forward"`), `"forward"`
+    (`jax.jacfwd`, `jax.jvp`, by replaying them forward; forward mode only), or a diffrax adjoint, e.g.
     `diffrax.RecursiveCheckpointAdjoint()` for higher-order derivatives.
 
     Cost: a repeated call at the top level (not under `jit`/`grad`/`vmap`) with the same options and
@@ -640,7 +646,7 @@ def launch_velocity(
     `until`: `"cascade"` (default) or `"launch"` (stop as soon as the top mass's launch is final, as for
     `simulate`: the top's entry is exact, the others are the velocities at that time).
     """
-    replay = isinstance(adjoint, str) and adjoint == "reverse"
+    replay = adjoint if isinstance(adjoint, str) and adjoint in ("reverse", "forward") else False
     key = None
     top = _top_level((stack, state))
     if top:  # at the top level: the compiled program of this structure (`_Launch`)
@@ -657,7 +663,15 @@ def launch_velocity(
             _remember(_LAUNCHES, key, (_solver_row(solver), launch), 256)
         return launch.run_leaves(lv)
     # traced (the caller's jit, grad, vmap), or options that cannot be hashed
-    return _checked(*_launch_jit(stack, state, t_max_, cfg, replay), replay)
+    try:
+        out = _launch_jit(stack, state, t_max_, cfg, replay)
+    except TypeError as e:  # JAX's words for jvp of the reverse mode's custom_vjp: name the option instead
+        if replay == "reverse" and "forward-mode autodiff" in str(e):
+            raise ParameterError("adjoint", "reverse", "adjoint='forward' for forward-mode derivatives "
+                                 "(jax.jacfwd, jax.jvp); 'reverse' (the default) serves jax.grad, jax.vjp and "
+                                 "jax.jacrev") from None
+        raise
+    return _checked(*out, replay)
 
 
 # `launch_velocity`'s solves at the top level, by its options as written and the structure of its

@@ -62,3 +62,28 @@ def test_reverse_gradient_batched_matches_finite_differences_per_design():
     for theta, got in zip(thetas, replay):
         fd, scale = _central_differences(theta)
         assert np.max(np.abs(got - fd) / scale) <= 2e-4
+
+
+def _tsuji_top(m, adjoint):
+    # top launch velocity of a gapped 3-mass Tsuji stack under gravity (the defaults), as a function of the masses
+    import hertz_chain as hc
+
+    law = hc.make_law("tsuji", stiffness=1e9, restitution=0.8, effective_mass=0.4)
+    stack = Stack(m, law)
+    return launch_velocity(stack, at_impact(stack, 1.0, [2e-3, 5e-4]), adjoint=adjoint)[-1]
+
+
+def test_forward_mode_of_the_reverse_mode_is_refused_in_one_line():
+    """`jax.jacfwd` of `launch_velocity`'s default mode (the replayed reverse mode, a custom_vjp) names the
+    option to use, `adjoint="forward"` (JAX's own words were a bare TypeError about custom_vjp), plain and
+    under `jax.jit`. (Forward mode itself: tests/test_optimize.py, against central differences and the
+    reverse mode for every damped law.)"""
+    import pytest
+
+    from hertz_chain.errors import ParameterError
+
+    m = jnp.asarray([1.0, 0.5, 0.25])
+    for transform in (jax.jacfwd, lambda f: jax.jit(jax.jacfwd(f))):
+        with pytest.raises(ParameterError, match=r"^adjoint = 'reverse' is invalid: adjoint='forward' for "
+                                                 r"forward-mode derivatives \(jax.jacfwd, jax.jvp\)"):
+            transform(lambda x: _tsuji_top(x, "reverse"))(m)

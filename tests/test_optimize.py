@@ -95,7 +95,11 @@ def test_design_gradient_matches_central_differences(law):
     reverse mode through the design map, against central differences (step 1e-4 relative), to the
     issue's 1e-5, for every law of the issue: the damped laws' onsets (a force that rises as
     delta^(1/4) or sqrt(delta), or jumps) and releases (the clamp's kink) are split out of the replayed
-    steps (`hertz_chain._adjoint._Replay`; before, Tsuji was 0.4 off and Kelvin-Voigt 12)."""
+    steps (`hertz_chain._adjoint._Replay`; before, Tsuji was 0.4 off and Kelvin-Voigt 12). Forward mode
+    (`adjoint="forward"`, `jax.jacfwd`) replays the same steps forward: the same 1e-5 for the damped laws,
+    and the reverse mode's discrete derivative to rounding (1e-9: one is the other's transpose; through
+    diffrax's forward mode it was off by up to a factor 3,000 for Tsuji with gaps; Hunt–Crossley's forward
+    mode: tests/test_gradients.py)."""
     spec = parse_stack(_stack_doc(law))
     slots = resolve("stack.masses", [2], n=3, ground=True) + resolve("contact.stiffness", [2], n=3, ground=True)
     if law != "hertz":
@@ -108,6 +112,9 @@ def test_design_gradient_matches_central_differences(law):
     ref = jax.jit(lambda x: hc.launch_velocity(*dm(x), tolerances=hc.Tolerances(rtol=1e-13, atol=1e-13))[-1])
     x0 = dm.values()
     grad = np.asarray(jax.grad(f)(jnp.asarray(x0)))
+    forward = (np.asarray(jax.jit(jax.jacfwd(lambda x: hc.launch_velocity(*dm(x), adjoint="forward")[-1]))(
+        jnp.asarray(x0))) if not LAWS[law].smooth_onset else grad)
+    np.testing.assert_allclose(forward, grad, rtol=1e-9, atol=0)
     for i in range(len(x0)):
         h = 1e-4 * x0[i]
         up, down = x0.copy(), x0.copy()
@@ -115,6 +122,7 @@ def test_design_gradient_matches_central_differences(law):
         down[i] -= h
         fd = (float(ref(up)) - float(ref(down))) / (2 * h)
         assert grad[i] == pytest.approx(fd, rel=1e-5), (slots[i].label, grad[i], fd)
+        assert forward[i] == pytest.approx(fd, rel=1e-5), (slots[i].label, forward[i], fd)
 
 
 # ------------------------------------------------------------------------------------ independent optima
