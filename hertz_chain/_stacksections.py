@@ -640,8 +640,9 @@ def parse_srs_table(table: Any, where: str) -> tuple[tuple[float, float], ...]:
         if not isinstance(row, list) or len(row) != 2:
             raise _error(f"{where}[{i}]", f"{row!r} is invalid: a row [frequency, level]")
         f = parse_quantity(row[0], "frequency", f"{where}[{i}][0]") if isinstance(row[0], str) else row[0]
-        if isinstance(f, bool) or not isinstance(f, (int, float)) or not (math.isfinite(f) and 1e-3 <= f <= 1e6):
-            raise _error(f"{where}[{i}][0]", f"{row[0]!r} is invalid: a frequency in Hz, 1e-3 to 1e6")
+        lo, hi = SRS_BAND_LIMITS
+        if isinstance(f, bool) or not isinstance(f, (int, float)) or not (math.isfinite(f) and lo <= f <= hi):
+            raise _error(f"{where}[{i}][0]", f"{row[0]!r} is invalid: a frequency in Hz, {lo:g} to {hi:g}")
         a = row[1]
         if isinstance(a, bool) or not isinstance(a, (int, float)) or not (math.isfinite(a) and 0 < a <= 1e8):
             raise _error(f"{where}[{i}][1]", f"{row[1]!r} is invalid: a level in g, > 0")
@@ -649,6 +650,9 @@ def parse_srs_table(table: Any, where: str) -> tuple[tuple[float, float], ...]:
     freqs = [r[0] for r in rows]
     if any(b <= a for a, b in zip(freqs, freqs[1:])):
         raise _error(where, "the frequencies must increase from row to row")
+    if freqs[-1] / freqs[0] > SRS_MAX_SPAN:  # the SRS is computed over the table's band (as `[srs] band`)
+        raise _error(where, f"{freqs[0]:g} Hz to {freqs[-1]:g} Hz is invalid: the rows span at most "
+                     f"{math.log10(SRS_MAX_SPAN):g} decades (f_max/f_min <= {SRS_MAX_SPAN:g})")
     return tuple(rows)
 
 

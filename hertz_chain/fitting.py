@@ -45,7 +45,7 @@ import numpy as np
 
 from .constants import G0
 from .errors import ParameterError, StackFileError
-from .keys import KEYS, Slot, quantity_of, read_bounds, read_entry, resolve
+from .keys import KEYS, Slot, check_values, quantity_of, read_bounds, read_entry, resolve
 
 __all__ = ["FIT_KEYS", "FitParameter", "FitResult", "parse_vary_option", "read_fit_file", "fit"]
 
@@ -191,6 +191,7 @@ def _parse_fit(raw: Any, spec) -> tuple[list[_Vary], int]:
         if "bounds" in item:
             dim, p = quantity_of(spec, key, item.get("index"), where)
             bounds = read_bounds(item["bounds"], dim, f"{where}.bounds", p)
+            check_values(key, list(bounds), f"{where}.bounds", shown=repr(item["bounds"]))
         elif key not in DEFAULT_BOUNDS:
             raise StackFileError(f"{where}.bounds: missing; {key} has no default bounds (give [lower, upper] "
                                  "with units)")

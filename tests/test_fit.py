@@ -127,6 +127,12 @@ def test_cli_fit_writes_a_stack_file_that_simulates_to_the_fit(files, tmp_path):
     (["--vary", "contact.stiffness[0"], "KEY[INDEX]"),
     ([], "nothing to fit"),
     (["--vary", VARY[0], "--cfc", "500"], "--cfc"),
+    # bounds outside what the key allows are refused before any solve, as optimize's are (were a traceback
+    # from inside the solve, exit 1, or a scipy ValueError)
+    (["--set", 'fit.vary=[{key="contact.restitution", index=0, bounds=[0.5, 1.5]}]'],
+     "fit.vary[0].bounds: [0.5, 1.5] is invalid: contact.restitution must be > 0 and <= 1"),
+    (["--set", 'fit.vary=[{key="stack.masses", index=0, bounds=["-1 kg", "1 kg"]}]'],
+     "is invalid: stack.masses must be > 0"),
 ])
 def test_cli_fit_bad_input_is_one_line(files, args, needle):
     res = runner.invoke(app, ["fit", str(files / "start.toml"), str(files / "clean.csv"), *args])

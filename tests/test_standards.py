@@ -238,6 +238,10 @@ def test_srs_criterion_against_pyyeti():
     ({"srs_tolerance_db": 3}, "used only with test.srs"),
     ({"srs": [[100, 10], [1000, 20]], "srs_tolerance_db": [3, 6]}, "test.srs_tolerance_db"),
     ({"srs": [[100, 10], [1000, 20]], "srs_q": 0.1}, "test.srs_q"),
+    # the SRS is computed over the table's band: [srs] band's limits (0.01 Hz to 10 MHz, 5 decades); a table
+    # from 1 mHz to 1 MHz tried to allocate 375 GiB
+    ({"srs": [[0.001, 10], [1e6, 2000]]}, "test.srs[0][0]: 0.001 is invalid: a frequency in Hz, 0.01 to 1e+07"),
+    ({"srs": [[0.01, 10], [1e6, 2000]]}, "test.srs: 0.01 Hz to 1e+06 Hz is invalid: the rows span at most 5 decades"),
 ])
 def test_bad_srs_requirements(raw, key):
     with pytest.raises(StackFileError) as err:
