@@ -53,6 +53,7 @@ _EXPORTS = {
     "ContactEpisode": "episodes",
     "contact_episodes": "episodes",
     "HertzChainError": "errors",
+    "GradientAccuracyWarning": "errors",
     "ParameterError": "errors",
     "SolverError": "errors",
     "StackFileError": "errors",
@@ -173,7 +174,7 @@ if _TYPE_CHECKING:  # the same names, spelled out for type checkers and IDEs
     from .episodes import ContactEpisode, contact_episodes
     from .filters import cfc_filter
     from .measured import Comparison, MeasuredPulse, compare, read_pulse_csv, sprague_geers
-    from .errors import HertzChainError, ParameterError, SolverError, StackFileError
+    from .errors import GradientAccuracyWarning, HertzChainError, ParameterError, SolverError, StackFileError
     from .materials import Material, contact_stiffness, effective_mass, material, material_names
     from .constants import G0, STANDARD_GRAVITY
     from .optimization import OptimizeResult, optimize

@@ -14,6 +14,7 @@ __all__ = [
     "StackFileError",
     "SolverError",
     "OutputPathError",
+    "GradientAccuracyWarning",
     "check_parameter",
     "check_number",
     "check_positive",
@@ -61,6 +62,13 @@ class OutputPathError(HertzChainError, ValueError):
 
 class SolverError(HertzChainError, RuntimeError):
     """The ODE solver failed (max steps, non-finite state, ...). The message carries a hint."""
+
+
+class GradientAccuracyWarning(UserWarning):
+    """A derivative is computed where it is known to be less accurate than the solve: through the
+    elastic–plastic laws (Thornton, Jackson–Green) the replayed derivatives do not treat the switch from
+    loading to unloading (measured up to 3e-3 relative off central differences). Warned when such a
+    derivative is traced (once per compilation)."""
 
 
 def check_parameter(ok: bool, name: str, value: object, allowed: str) -> None:

@@ -3,11 +3,15 @@
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 from _helpers import G
 
 from hertz_chain.contact import HuntCrossley
 from hertz_chain.simulation import Tolerances, launch_velocity
 from hertz_chain.stack import Stack, at_impact
+
+# the elastic and damped laws' derivatives are the solve's: nothing may warn that they are approximate
+pytestmark = pytest.mark.filterwarnings("error::hertz_chain.errors.GradientAccuracyWarning")
 
 
 def _hc_top(theta, tol, adjoint="forward", solver="tsit5"):
@@ -78,8 +82,6 @@ def test_forward_mode_of_the_reverse_mode_is_refused_in_one_line():
     option to use, `adjoint="forward"` (JAX's own words were a bare TypeError about custom_vjp), plain and
     under `jax.jit`. (Forward mode itself: tests/test_optimize.py, against central differences and the
     reverse mode for every damped law.)"""
-    import pytest
-
     from hertz_chain.errors import ParameterError
 
     m = jnp.asarray([1.0, 0.5, 0.25])
