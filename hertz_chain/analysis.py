@@ -277,6 +277,25 @@ def _top_srs(t, a_g, v_g, episodes, top_if, options=None) -> ShockResponseSpectr
         return None
 
 
+def _nominal(e, n: int) -> np.ndarray:
+    """`nominal_restitution` as `(n,)` floats (a single number for every interface), each in [0, 1] or NaN
+    (none: a law without a nominal restitution, or the ground's entry without a ground); raises
+    `ParameterError`."""
+    allowed = f"a number in [0, 1] or {n} of them (entry 0: the ground)"
+    try:
+        a = np.asarray(e, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError("nominal_restitution", e, allowed) from None
+    if a.ndim == 0:
+        a = np.full(n, float(a))
+    if a.shape != (n,):
+        raise ParameterError("nominal_restitution", f"shape {a.shape}", allowed)
+    if not np.all(np.isnan(a) | ((a >= 0) & (a <= 1))):
+        raise ParameterError("nominal_restitution", e if a.size < 8 else "values outside [0, 1]",
+                             "restitutions in [0, 1]")
+    return a
+
+
 def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = None,
             srs_options: SRSOptions | None = None, yield_limits=()) -> Report:
     """Analyse a `hertz_chain.Solution` (see the module docstring for every quantity).
@@ -285,7 +304,8 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
 
     - `solution`: the result of `hertz_chain.simulation`.
     - `nominal_restitution`: `(n,)` the restitution each interface was designed for (entry 0 = ground;
-      entry 0 ignored without the ground), for the nominal rigid prediction; None skips it.
+      entry 0 ignored without the ground), or one number for all, each in [0, 1] (NaN: none), for the
+      nominal rigid prediction; None skips it. Raises `ParameterError` otherwise.
     - `tolerances`: optional `{"rtol": ..., "atol": ...}` the solve used, for the warnings.
     - `srs_options`: how the top SRS is computed (`hertz_chain.spectrum.SRSOptions`; the stack file's
       `[srs]`); default maximax absolute acceleration, Q = 10, 1/12 octave, the default band.
@@ -303,6 +323,8 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     sol = solution
     stack = sol.stack
     st = sol.steps
+    if nominal_restitution is not None:
+        nominal_restitution = _nominal(nominal_restitution, int(np.size(stack.masses)))
     if st is None:
         raise ParameterError("solution", "a design without step history",
                              "a Solution with steps (simulate, or simulate_batch with save_steps=True)")
@@ -491,8 +513,9 @@ def _warnings(sol, e_meas, e_nom, regime, tolerances) -> list[str]:
     if e_nom is not None and regime == "independent":
         for j, (em, en) in enumerate(zip(e_meas, np.asarray(e_nom, dtype=float))):
             if np.isfinite(em) and np.isfinite(en) and en > 0 and abs(em - en) > RESTITUTION_WARN * en:
-                out.append(f"interface {j}: the contact law gives e = {em:.4f} where the file asks for "
-                           f"{en:.4f} ({(em - en) / en:+.1%}): its chi map is approximate at this speed")
+                out.append(f"interface {j}: the contact law gives e = {em:.4f} where the nominal restitution is "
+                           f"{en:.4f} ({(em - en) / en:+.1%}): a law calibrated to it from a stack file (its chi "
+                           "map) is approximate at this speed; a law given in Python may not be calibrated to it")
     if tolerances is not None:
         loose = {k: v for k, v in tolerances.items() if v is not None and v > TOLERANCE_WARN}
         for k, v in loose.items():

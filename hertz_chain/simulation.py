@@ -275,7 +275,15 @@ def simulate(
     _not_traced("simulate", stack, state)
     _check_one_design(stack)
     ts, t_max, cfg = _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, until=until)
-    out = _solve(stack, state, ts, t_max, cfg)
+    try:
+        out = _solve(stack, state, ts, t_max, cfg)
+    except eqx.EquinoxRuntimeError as e:  # diffrax's check of the times, against the default t_max
+        if ts is None or "saveat.ts must lie between" not in str(e):
+            raise
+        sc, _, _, t1s = _setup(stack, state, t_max, cfg)
+        t_used = float(t1s * sc.time)
+        raise ParameterError("ts", f"last time {float(ts[-1]):g} s", f"times up to t_max = {t_used:.6g} s (the "
+                             "default from the physics; give t_max to go further)") from None
     out["scales"] = Scales(**out["scales"])
     out = _post_history(out, stack, batched=False)
     sol = _to_solution(out | {"status_code": out["status"]}, stack, state)

@@ -158,6 +158,8 @@ class Stack(eqx.Module):
         n = masses.shape[0]
         if not 1 <= n <= MAX_MASSES:
             raise ParameterError("len(masses)", n, f"between 1 and {MAX_MASSES} masses")
+        if not isinstance(ground, (bool, np.bool_)):  # a string such as "false" would read as True
+            raise ParameterError("ground", ground, "True or False")
         if n == 1 and not ground:
             raise ParameterError("ground", ground, "True for a single mass (it needs something to hit)")
         if _is_concrete(masses, gravity):

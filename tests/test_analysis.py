@@ -12,6 +12,8 @@ References:
   of the independent-collision gain.
 """
 
+import re
+
 import numpy as np
 import pytest
 
@@ -92,6 +94,12 @@ def test_single_hertz_bounce_pulse():
     stack = Stack([m], [hc.Hertz(K)], gravity=0.0)
     sol = simulate(stack, at_impact(stack, v), tolerances=Tolerances(rtol=1e-10, atol=1e-10))
     r = analyse(sol, nominal_restitution=[1.0])
+    # one number for every interface is the same; anything else is refused in one line (a scalar was an
+    # IndexError, a string a bare ValueError, a wrong length or e > 1 only a note in the rigid comparison)
+    assert analyse(sol, nominal_restitution=1.0).rigid == r.rigid
+    for bad, what in [("abc", "'abc'"), ([0.8] * 5, "shape (5,)"), ([1.5], "[1.5]"), (-0.1, "-0.1")]:
+        with pytest.raises(hc.ParameterError, match=r"^nominal_restitution = .*" + re.escape(what)):
+            analyse(sol, nominal_restitution=bad)
     d_max = (5 * m * v**2 / (4 * K)) ** 0.4
     f_max = K * d_max**1.5
     (ep,) = r.episodes

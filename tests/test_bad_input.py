@@ -540,6 +540,12 @@ API_ROWS = [
           ("prepare_launch", lambda: __import__("hertz_chain").prepare_launch(*_batch(2))),
           ("prepared_function", lambda: __import__("hertz_chain").prepare_launch(_stack(2), __import__(
               "hertz_chain").at_impact(_stack(2), 1.0))(*_batch(2)))]],
+    ("stack_ground_string", lambda: __import__("hertz_chain").Stack([1.0, 0.5], __import__("hertz_chain").Hertz(1e9),
+                                                                   ground="false"), ParameterError,
+     "ground = 'false' is invalid: True or False"),
+    ("simulate_ts_past_t_max", lambda: __import__("hertz_chain").simulate(
+        _stack(2), __import__("hertz_chain").at_impact(_stack(2), 1.0, 1e-3), ts=[0.0, 10.0]), ParameterError,
+     "ts = 'last time 10 s' is invalid: times up to t_max = "),
     ("check_output_missing", lambda: _paths.check_output_path("/nonexistent/r.nc", "--output", (".nc",), False),
      OutputPathError, "--output"),
     ("check_output_suffix", lambda: _paths.check_output_path("r.txt", "--output", (".nc",), False),
