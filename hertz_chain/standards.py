@@ -333,14 +333,20 @@ def _judge(name, unit, value, nominal, tol) -> Criterion:
     return Criterion(name, unit, float(value), float(nominal), float(lo), float(hi), float(margin), bool(margin >= 0))
 
 
+#: even points over the nominal pulse's support at which `band_margin` also evaluates the band
+BAND_POINTS = 401
+
+
 def band_margin(t, a_g, spec: TestSpec, start: float, lobe: tuple[float, float]) -> float:
     """Smallest distance (g) of the pulse inside its band (:func:`band_limits`), negative where it leaves
     it, over the nominal pulse's support `[start, start + D (+ fall_time)]` joined with the pulse's main
     lobe `lobe`, for the nominal pulse starting at `start` (the pulse `a_g` in g, linear between
-    samples, sampled at `t`)."""
+    samples, sampled at `t`, its first and last values held outside them). Evaluated at the pulse's samples
+    and at `BAND_POINTS` even points over that support: the band's own shape counts between samples, and
+    where the nominal pulse reaches past the record (the record stops at the cascade's end)."""
     t0, t1 = min(start, lobe[0]), max(start + spec.duration + (spec.fall_time or 0.0), lobe[1])
     inside = (t >= t0) & (t <= t1)
-    tt = np.concatenate([[t0], t[inside], [t1]])
+    tt = np.union1d(t[inside], np.linspace(t0, t1, BAND_POINTS))
     aa = np.interp(tt, t, a_g)
     lo, hi = band_limits(spec, tt - start)
     return float(np.min(np.minimum(hi - aa, aa - lo)))

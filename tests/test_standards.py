@@ -256,3 +256,19 @@ def test_simulate_checks_a_test_section_it_does_not_use(tmp_path):
     assert res.exit_code == 2 and "test.band" in res.output and len(res.output.strip().splitlines()) == 1
     res = runner.invoke(app, ["check", EXAMPLE, "--set", "test.band=1.5"])
     assert res.exit_code == 2 and "test.band" in res.output and "(with --set)" in res.output
+
+
+def test_the_band_counts_where_the_nominal_pulse_reaches_past_the_samples():
+    """A 1 ms half-sine of 1000 g, sampled over its own 1 ms and once more at 4 ms (zero: the record of a top
+    mass that has flown off), against a 5 ms half-sine condition with a 20 % band. The best placement
+    centres the nominal pulse on the record's; where the record returns to zero, 0.5 ms from the centre,
+    the nominal pulse still reads 1000 cos(pi 0.5 / 5) g, the largest excursion (closed form), however the
+    record is sampled: the band is evaluated between the samples too (it read 643 g, only at the samples),
+    and a densely resampled record gives the same."""
+    spec = parse_test({"shape": "half-sine", "peak_g": 1000, "duration": "5 ms", "band": 0.2})
+    t = np.concatenate([np.linspace(0.0, 1e-3, 51), [4e-3]])
+    a = np.concatenate([1000 * G0 * np.sin(np.pi * t[:51] / 1e-3), [0.0]])
+    dense = np.arange(-6e-3, 10e-3, 2e-7)
+    for tt, aa in ((t, a), (dense, np.interp(dense, t, a))):
+        (band,) = [c for c in check_pulse(tt, aa, spec).criteria if c.name == "band"]
+        assert band.value == pytest.approx(1000 * math.cos(math.pi * 0.5 / 5), rel=1e-8) and not band.passed
