@@ -421,7 +421,9 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
         raise ParameterError(f"{measured.source or 'measured'}: time window",
                              f"[{t[0] * 1e3:.6g}, {t[-1] * 1e3:.6g}] ms",
                              f"a record that holds the model's pulse ({top.duration_10 * 1e3:.4g} ms between its 10 % "
-                             "points; the model reads zero on this window): check the time unit (header or --time-unit)")
+                             "points; the model reads zero on this window): check the time unit (header or --time-unit)"
+                             + (" or the alignment (the model's clock starts at impact: --align xcorr or onset, "
+                                "in the Python API a shift)" if align in ("none", "given") else ""))
     meas_pm, model_pm = pulse_metrics(t, meas), pulse_metrics(t, model)
     ratio = meas_pm.duration_10 / top.duration_10
     if not 0.1 <= ratio <= 10:

@@ -419,6 +419,9 @@ def _tolerance(raw, key: str) -> tuple[float, float]:
             or not all(math.isfinite(v) for v in vals)):
         raise StackFileError(f"test.{key}: {raw!r} is invalid: a percentage (10 = ±10 %) or [below, above] "
                              "in percent, e.g. [-20, 20]")
+    if len(vals) == 1 and vals[0] < 0:  # a one-sided tolerance is a list; a negative ± is a typo
+        raise StackFileError(f"test.{key}: {raw!r} is invalid: a percentage >= 0 (10 = ±10 %), or [below, above] "
+                             "for a one-sided tolerance, e.g. [-20, 0]")
     lo, hi = (-abs(vals[0]), abs(vals[0])) if len(vals) == 1 else (float(vals[0]), float(vals[1]))
     if not (-100 < lo <= 0 <= hi):
         raise StackFileError(f"test.{key}: {raw!r} is invalid: [below, above] with -100 < below <= 0 <= above (percent)")
@@ -434,6 +437,9 @@ def _db_tolerance(raw) -> tuple[float, float]:
             or not all(math.isfinite(v) for v in vals)):
         raise StackFileError(f"test.srs_tolerance_db: {raw!r} is invalid: decibels (6 = ±6 dB) or [below, above], "
                              "e.g. [-3, 6]")
+    if len(vals) == 1 and vals[0] < 0:
+        raise StackFileError(f"test.srs_tolerance_db: {raw!r} is invalid: decibels > 0 (6 = ±6 dB), or [below, above] "
+                             "for a one-sided tolerance, e.g. [-3, 0]")
     lo, hi = (-abs(vals[0]), abs(vals[0])) if len(vals) == 1 else (float(vals[0]), float(vals[1]))
     if not (lo <= 0 <= hi and hi - lo > 0):
         raise StackFileError(f"test.srs_tolerance_db: {raw!r} is invalid: [below, above] with below <= 0 <= above")

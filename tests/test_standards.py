@@ -165,6 +165,9 @@ def test_test_section_overrides_the_row():
     ({"shape": "square", "peak_g": 1, "duration": "1 ms"}, "test.shape"),
     ({"shape": "half-sine", "duration": "1 ms"}, "test.peak_g"),
     ({"standard": "JESD22-B110 B", "peak_tolerance": [5, 10]}, "test.peak_tolerance"),
+    # a negative ± tolerance is a typo (it was read as ±5 %)
+    ({"standard": "JESD22-B110 B", "peak_tolerance": -5}, "test.peak_tolerance: -5 is invalid: a percentage >= 0"),
+    ({"standard": "JESD22-B110 B", "duration_tolerance": -30}, "test.duration_tolerance: -30 is invalid"),
     ({"standard": "JESD22-B110 B", "band": 1.5}, "test.band"),
     ({"standard": "JESD22-B110 B", "duration": "1 kg"}, "test.duration"),
 ])
@@ -238,6 +241,7 @@ def test_srs_criterion_against_pyyeti():
     ({"srs_tolerance_db": 3}, "used only with test.srs"),
     ({"srs": [[100, 10], [1000, 20]], "srs_tolerance_db": [3, 6]}, "test.srs_tolerance_db"),
     ({"srs": [[100, 10], [1000, 20]], "srs_q": 0.1}, "test.srs_q"),
+    ({"srs": [[100, 10], [1000, 20]], "srs_tolerance_db": -6}, "test.srs_tolerance_db: -6 is invalid: decibels > 0"),
     # the SRS is computed over the table's band: [srs] band's limits (0.01 Hz to 10 MHz, 5 decades); a table
     # from 1 mHz to 1 MHz tried to allocate 375 GiB
     ({"srs": [[0.001, 10], [1e6, 2000]]}, "test.srs[0][0]: 0.001 is invalid: a frequency in Hz, 0.01 to 1e+07"),
