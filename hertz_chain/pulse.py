@@ -32,8 +32,9 @@ is read between its 10 % points, as in docs/references.md, "Shock pulses"):
   (10 % by default), the interpolant returning below the threshold between two episodes. A pulse of
   the opposite sign that exceeds the threshold counts as a separate pulse; noise that chatters around
   the threshold counts every excursion (raise the threshold for noisy data).
-* **truncated**: True when the main pulse (at any of the levels above) or its lobe reaches the first or
-  the last sample, i.e. the record cut the pulse; the durations are then measured to the record end.
+* **truncated**: True when the main pulse (at any of the levels above) reaches the first or the last
+  sample, or its lobe does while above `LOBE_EDGE` (0.1 %) of the peak, i.e. the record cut the pulse;
+  the durations are then measured to the record end.
 
 Degenerate input (fewer than 2 samples, non-finite values, time not strictly increasing, an
 all-zero record, levels outside (0, 1)) raises :class:`~hertz_chain.errors.ParameterError`; no metric
@@ -136,6 +137,11 @@ def _cross(t: np.ndarray, y: np.ndarray, i: int, level: float) -> float:
     y0, y1 = y[i], y[i + 1]
     frac = (level - y0) / (y1 - y0)
     return float(t[i] + frac * (t[i + 1] - t[i]))
+
+
+#: the fraction of the peak above which a lobe that reaches the record's first or last sample is cut
+#: (`truncated`)
+LOBE_EDGE = 1e-3
 
 
 def _bounds(t: np.ndarray, y: np.ndarray, ip: int, level: float, strict: bool):
@@ -277,6 +283,9 @@ def pulse_metrics(
         cum = np.concatenate(([0.0], np.cumsum(0.5 * np.diff(t) * (a[1:] + a[:-1]))))
     dv = float(cum[-1]) if delta_v is None else float(delta_v)
     z0, z1, _, _, trunc_l = _bounds(t, y, ip, 0.0, strict=True)
+    # the lobe cut where it is still above `LOBE_EDGE` of the peak (a record that starts or ends on the
+    # tail of a contact's force, a few millionths of the peak, has the whole pulse)
+    trunc_l = trunc_l and ((z0 == t[0] and y[0] > LOBE_EDGE * peak) or (z1 == t[-1] and y[-1] > LOBE_EDGE * peak))
     dv_main = _integral_to(t, a, cum, z1) - _integral_to(t, a, cum, z0)
 
     t_peak = float(t[ip])

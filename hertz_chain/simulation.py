@@ -74,7 +74,10 @@ out of them so that the derivative sees how they move: docs/solver-defaults.md, 
 the replay"; the two modes give the same discrete derivative. The derivative is as accurate as the
 solve's tolerance, no better: within 2e-6 of central differences in the masses, stiffnesses and
 restitutions for every law of the registry's five (Hertz, Hunt–Crossley, Tsuji, Kelvin–Voigt,
-viscoelastic) with gaps or touching, at the default 1e-11.
+viscoelastic) with gaps or touching, at the default 1e-11. In the gaps less: 1.8e-4 relative measured
+(three Hertz masses, 2 mm gaps, gravity; without gravity 4e-3 absolute where the exact derivative is 0),
+converging as the tolerance is tightened (1.4e-6 at 1e-13). Through the elastic–plastic laws (Thornton,
+Jackson–Green) up to 3e-3, with a `GradientAccuracyWarning`.
 
 The reasoning behind these defaults, with the measurements that decided them, is the developer page
 `docs/solver-defaults.md`.

@@ -145,6 +145,16 @@ def test_exact_delta_v_is_used():
     assert m.delta_v == HS_DV
 
 
+def test_a_record_that_starts_on_the_tail_of_the_lobe_is_not_truncated():
+    """A record that starts where the pulse is a few millionths of its peak (a check window after a contact's
+    tail) holds the whole pulse; one that starts at 5 % of it (below the 10 % level) cuts its lobe."""
+    t = np.linspace(0.0, D, 1001)
+    tail = 1e-6 * A * np.exp(-t / D)  # a positive tail under the half-sine
+    assert not pulse_metrics(t, half_sine(t) + tail).truncated
+    t5 = t[t >= D * math.asin(0.05) / math.pi]
+    assert pulse_metrics(t5, half_sine(t5)).truncated
+
+
 def test_truncated_record_is_flagged_and_finite():
     t = np.linspace(0.0, 0.7 * D, 701)  # the record stops before the pulse ends
     m = pulse_metrics(t, half_sine(t))
