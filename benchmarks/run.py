@@ -46,7 +46,8 @@ import hertz_chain as hc  # noqa: E402
 
 import cases  # noqa: E402
 from methods import (  # noqa: E402
-    DIFFRAX_METHODS, QUICK_DIFFRAX_METHODS, SCIPY_METHODS, DiffraxCase, ScipyCase, find_matched, fine_grid, median_time, rel_err,
+    DIFFRAX_METHODS, QUICK_DIFFRAX_METHODS, SCIPY_METHODS, DiffraxCase, ScipyCase, find_matched, fine_grid, interleaved_medians,
+    median_time, rel_err,
     steps_budget,
 )
 
@@ -231,11 +232,14 @@ def grad_bench(sizes, quick: bool) -> list[dict]:
             jacf = jax.jit(jax.jacfwd(lambda m: top(m, "forward")))
             reps = 3 if quick else 9
             t_c = time.perf_counter(); jax.block_until_ready(grad(m0)); c_grad = time.perf_counter() - t_c  # noqa: E702
-            t_fwd = median_time(lambda: jax.block_until_ready(fwd(m0)), reps)
-            t_grad = median_time(lambda: jax.block_until_ready(grad(m0)), reps)
-            # quick: no second gradient compile (tests/test_gradients.py compares the two reverse modes)
-            t_dfx = math.nan if quick else median_time(lambda: jax.block_until_ready(grad_dfx(m0)), reps)
-            t_jacf = math.nan if quick else median_time(lambda: jax.block_until_ready(jacf(m0)), reps)
+            calls = {"fwd": lambda: jax.block_until_ready(fwd(m0)), "grad": lambda: jax.block_until_ready(grad(m0))}
+            if not quick:  # quick: no second gradient compile (tests/test_gradients.py compares the modes)
+                calls |= {"dfx": lambda: jax.block_until_ready(grad_dfx(m0)),
+                          "jacf": lambda: jax.block_until_ready(jacf(m0))}
+            # in alternation, in warm blocks (`interleaved_medians`): a slow spell falls on all of them alike
+            med = interleaved_medians(calls, reps, block=1 if quick else 3, budget_s=3.0 if quick else 12.0)
+            t_fwd, t_grad = med["fwd"], med["grad"]
+            t_dfx, t_jacf = med.get("dfx", math.nan), med.get("jacf", math.nan)
             g_r = np.asarray(grad(m0))
             g_d = g_r * math.nan if quick else np.asarray(grad_dfx(m0))
             g_f = g_r * math.nan if quick else np.asarray(jacf(m0))
@@ -456,7 +460,8 @@ def markdown(data: dict) -> str:
           f"{mc['loadavg_start']:.2f} (timings are noisy: other work shared the machine; compare ratios within this run). "
           f"Python {mc['python']}, jax {mc['jax']}, jaxlib {mc['jaxlib']}, diffrax {mc['diffrax']}, equinox "
           f"{mc['equinox']}, scipy {mc['scipy']}, numpy {mc['numpy']}." + (
-              f" Batches: {mc['batch_rerun']}." if mc.get("batch_rerun") else ""), ""]
+              f" Batches: {mc['batch_rerun']}." if mc.get("batch_rerun") else "") + (
+              f" Gradients: {mc['grads_rerun']}." if mc.get("grads_rerun") else ""), ""]
 
     L += ["## Targets", "", "| target | goal | measured | met | how |", "|---|---|---|---|---|"]
     for t in data["targets"]:
