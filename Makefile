@@ -17,7 +17,7 @@ demo: $(STAMP)
 	$(BIN)/hertz-chain demo
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -n 2 -q --durations=20
+	$(BIN)/python -m pytest -n 2 --dist worksteal -q --durations=20
 
 # The documentation site (mkdocs-material + mkdocstrings) into site/, every warning an error.
 docs: $(STAMP)

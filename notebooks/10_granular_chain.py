@@ -24,7 +24,7 @@
 #    speed `0.9075 (k/m)^{2/5} v_m^{1/5}` beads per second) and Nesterenko's continuum solution (`(16/25)^{1/5} = 0.9146`, 0.8 % faster);
 # 2. **Width** against the continuum's profile: strain `∝ cos⁴(√10 x / (5a))` over one wavelength of
 #    `π√10/2 ≈ 4.97` bead diameters `a`, so the force (`∝ strain^{3/2}`) has a half-maximum width of
-#    `(10/√10) arccos(2^{-1/6}) = 1.488` beads;
+#    `(10/√10) arccos(2^{-1/6}) = 1.491` beads;
 # 3. **A tapered chain** (masses falling by a fixed ratio per bead, Sen et al.): how the end bead's
 #    launch grows with the taper;
 # 4. **A dissipative chain** with Hertz plus a linear dashpot (Rosas, Romero, Nesterenko & Lindenberg
@@ -114,8 +114,9 @@ write_table("granular_solitary_wave", ["quantity", "value", "reference"],
 # %% [markdown]
 # ## 2. Width against the continuum solution
 #
-# A snapshot of the force along the chain when the wave is in the middle, against the continuum
-# profile `F ∝ cos⁶(√10 x / (5a))` centred on the same peak.
+# The force pulse's half-maximum width (each middle contact's pulse in time, times the wave's speed)
+# against the continuum's, and a snapshot of the force along the chain when the wave is in the middle,
+# against the continuum profile `F ∝ cos⁶(√10 x / (5a))` centred on the same peak.
 
 # %%
 i_mid = int(np.nanargmax(F[:, N // 2]))
@@ -125,7 +126,7 @@ x = np.arange(1, N) - (j0 + 1)
 
 
 def half_width(xs, ys):
-    """Width at half the maximum, by linear interpolation on both flanks (in contacts = bead diameters)."""
+    """Width at half the maximum of the peak of `ys` over `xs`, by linear interpolation on both flanks."""
     k, half = int(np.argmax(ys)), 0.5 * ys.max()
     lo = next(i for i in range(k, 0, -1) if ys[i - 1] < half)
     hi = next(i for i in range(k, len(ys) - 1) if ys[i + 1] < half)
@@ -134,10 +135,10 @@ def half_width(xs, ys):
     return x_hi - x_lo
 
 
-# the snapshot is taken at a sample, not exactly at the peak of a contact: the width is the average over
-# the samples while the wave crosses one bead
-i_next = int(np.nanargmax(F[:, N // 2 + 1]))
-fwhm = float(np.mean([half_width(x.astype(float), F[i, 1:]) for i in range(i_mid, i_next)]))
+# the width in beads: each middle contact's force pulse in time (16 samples per contact time, finely
+# resolved) at half its maximum, times the wave's speed. (A snapshot along the chain samples the profile at
+# whole beads only, and linear interpolation between them widens a peaked profile: it read 1.61 beads.)
+fwhm = float(np.mean([half_width(np.asarray(g.t), np.nan_to_num(F[:, j])) for j in range(N // 4, 3 * N // 4)])) * speed
 theta = np.sqrt(10) * x / 5
 cont = np.where(np.abs(theta) <= np.pi / 2, np.cos(theta) ** 6, 0.0) * profile.max()
 fwhm_cont = 2 * 5 / np.sqrt(10) * np.arccos(2 ** (-1 / 6))

@@ -380,21 +380,30 @@ def test_fit_and_sweep_design_maps_take_a_plastic_law(tmp_path):
 def test_a_derivative_through_a_plastic_law_warns_that_it_is_approximate():
     """The replayed derivatives do not treat an elastic-plastic law's switch from loading to unloading
     (a review measured Thornton's d v_top / d m_2 3.2e-3 and Jackson-Green's 1.3e-3 relative off central
-    differences): reverse and forward mode through Thornton and Jackson-Green warn
-    `GradientAccuracyWarning` when traced (`jax.eval_shape`: traced, not compiled); through Hertz nothing
-    is warned."""
+    differences): `jax.grad` through Thornton warns `GradientAccuracyWarning` when traced (`jax.eval_shape`:
+    traced, not compiled); the replay both modes build (`_adjoint._replay_of`) warns for Jackson-Green too
+    and not for an elastic law (tests/test_gradients.py also turns the warning into an error)."""
     import warnings
 
     import jax
 
-    def top(m, law, adjoint="reverse"):
+    from hertz_chain._adjoint import _replay_of
+    from hertz_chain.simulation import _launch_config
+
+    def top(m, law):
         stack = hc.Stack(m, law, gravity=0.0)
-        return hc.launch_velocity(stack, hc.at_impact(stack, 1.0, 1e-3), adjoint=adjoint)[-1]
+        return hc.launch_velocity(stack, hc.at_impact(stack, 1.0, 1e-3))[-1]
 
     m = jnp.asarray([0.1, 0.05])
-    plastic = [hc.make_law("thornton", stiffness=1e10, yield_pressure=2e9, effective_radius=2.5e-3),
-               hc.make_law("jackson-green", stiffness=1e10, yield_strength=1e8, effective_radius=5e-3)]
-    # Thornton in reverse mode, Jackson-Green in forward mode (each trace takes seconds)
-    for law, transform, adjoint in zip(plastic, (jax.grad, jax.jacfwd), ("reverse", "forward")):
-        with pytest.warns(hc.GradientAccuracyWarning, match="elastic-plastic contact law"):
-            jax.eval_shape(transform(lambda x: top(x, law, adjoint)), m)
+    thornton = hc.make_law("thornton", stiffness=1e10, yield_pressure=2e9, effective_radius=2.5e-3)
+    with pytest.warns(hc.GradientAccuracyWarning, match="elastic-plastic contact law"):
+        jax.eval_shape(jax.grad(lambda x: top(x, thornton)), m)
+    for law, warned in [(hc.make_law("jackson-green", stiffness=1e10, yield_strength=1e8, effective_radius=5e-3), True),
+                        (hc.Hertz(1e10), False)]:
+        stack = hc.Stack(m, law, gravity=0.0)
+        state = hc.at_impact(stack, 1.0, 1e-3)
+        _, cfg = _launch_config(stack, state, "tsit5", None, None, 16_384, "reverse", "cascade")
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            _replay_of(stack, jnp.ones(stack.state_size), 1.0, cfg)
+        assert any(issubclass(w.category, hc.GradientAccuracyWarning) for w in caught) == warned
