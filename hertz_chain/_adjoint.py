@@ -68,7 +68,11 @@ class _Replay(eqx.Module):
       force at `F = 0`): two solver steps that meet where that force is zero, found by one secant step
       from the linear guess (its derivative is the implicit function theorem's).
 
-    `split`: whether the last three kinds apply at all. Where every law's onset is smooth
+    - a turn (a law with memory, `memory`: a contact whose overlap rate changes sign from loading to
+      unloading inside the step, the kink of an elastic–plastic force where the stiffer unloading curve
+      takes over): two solver steps that meet where the overlap rate is zero, found as a release's split.
+
+    `split`: whether the onsets, windows and releases apply at all. Where every law's onset is smooth
     (`registry.LawRow.smooth_onset`: Hertz, Hunt–Crossley) every step is plain, releases of a clamped
     contact included: the solver's steps resolve them (within 1e-6 of central differences,
     `benchmarks/optimize.md`) and the gradient costs what it did before the split (`_smooth_onsets`).
@@ -82,6 +86,7 @@ class _Replay(eqx.Module):
     clamped: jax.Array
     n: int = eqx.field(static=True)
     split: bool = eqx.field(static=True, default=True)
+    memory: bool = eqx.field(static=True, default=False)
 
     def _args(self, dyn):
         return FieldArgs.of(eqx.combine(dyn, self.stack_static), self.scale, self.T)  # the divisors as factors
@@ -143,7 +148,7 @@ class _Replay(eqx.Module):
         y0, y1, t0, t1 = ys[:-1], ys[1:], ts[:-1], ts[1:]
         steps = jnp.arange(1, ts.shape[0]) <= N
         closes, j = jax.vmap(self.closing)(y0, y1, t1 - t0)
-        closes &= steps
+        closes &= steps & self.split  # onsets, windows and releases: only where a law's onset is not smooth
 
         def onset_at(y, t, t_end, jj):
             d, rate = self.approach(dyn, y, t)[:, jj]
@@ -154,13 +159,19 @@ class _Replay(eqx.Module):
         # each onset lies in its own step (clipped there), so they only move forward in time: the latest
         # before step k is a running maximum over the steps before it
         star = jnp.concatenate([jnp.full(1, -jnp.inf), jax.lax.cummax(onsets)[:-1]])
-        window = jnp.isfinite(star) & (t0 - star < _ONSET_WINDOW)
-        F = jax.vmap(lambda y: self.unclamped(dyn, y))(jnp.where(jnp.isfinite(ys), ys, 0.0))
+        window = jnp.isfinite(star) & (t0 - star < _ONSET_WINDOW) & self.split
+        finite = jnp.where(jnp.isfinite(ys), ys, 0.0)
+        F = jax.vmap(lambda y: jnp.stack([self.unclamped(dyn, y), self.rates(y)]))(finite)
         d = jax.vmap(self._overlaps)(ys)
-        kink = ((self.mask & self.clamped)[None, :] & (d[:-1] > 0) & (d[1:] > 0)
-                & (jnp.sign(F[:-1]) * jnp.sign(F[1:]) < 0) & steps[:, None])
+        inside = self.mask[None, :] & (d[:-1] > 0) & (d[1:] > 0) & steps[:, None]
+        kink = inside & self.clamped[None, :] & (jnp.sign(F[:-1, 0]) * jnp.sign(F[1:, 0]) < 0) & self.split
         kind = jnp.where(closes, 2, jnp.where(window, 1, jnp.where(jnp.any(kink, axis=1), 3, 0)))
-        return kind, j, jnp.argmax(kink, axis=1), star, F
+        jr = jnp.argmax(kink, axis=1)
+        if self.memory:  # a contact with memory turns from loading to unloading (its rate changes sign)
+            turn = inside & (F[:-1, 1] > 0) & (F[1:, 1] < 0)
+            kind = jnp.where((kind == 0) & jnp.any(turn, axis=1), 4, kind)
+            jr = jnp.where(kind == 4, jnp.argmax(turn, axis=1), jr)
+        return kind, j, jr, star, F
 
     def _branches(self, t0, t1, j, jr, f0, f1) -> list:
         """The replays `(dyn, y, t*) -> (y', t*')` of the step `t0 -> t1`, one per kind (class docstring;
@@ -168,9 +179,6 @@ class _Replay(eqx.Module):
 
         def plain(d, y, ts):
             return self._solver_step(dfx.ODETerm(_scaled_field), y, t0, t1, self._args(d)), ts
-
-        if not self.split:
-            return [plain]
 
         def in_window(d, y, ts):
             sa, sb = (jnp.maximum(t - ts, 0.0) ** (1.0 / _ONSET_POWER) for t in (t0, t1))
@@ -180,17 +188,31 @@ class _Replay(eqx.Module):
             return self.onset(d, y, t0, t1, ts, j)
 
         def release(d, y, ts):
-            # split where the unclamped force is zero (the clamp's kink): from the linear guess, one secant
-            # step through the sub-step, whose derivative is the implicit function theorem's (the slope
-            # is the step's, `f1 - f0`, without gradient)
+            # split where the unclamped force is zero (the clamp's kink)
+            return split_where(d, y, ts, lambda d, y: self.unclamped(d, y)[jr], f0[0, jr], f1[0, jr])
+
+        def turn(d, y, ts):
+            # a contact with memory turns from loading to unloading where its overlap rate is zero (the kink
+            # of its force: the unloading curve is stiffer), split there as a release is
+            return split_where(d, y, ts, lambda d, y: self.rates(y)[jr], f0[1, jr], f1[1, jr])
+
+        def split_where(d, y, ts, g, g0, g1):
+            # two solver steps that meet where `g` (linear between the step's ends, `g0`, `g1`) is zero, by one
+            # secant step from the linear guess, whose derivative is the implicit function theorem's (the
+            # slope is the step's, without gradient)
             term, args, h = dfx.ODETerm(_scaled_field), self._args(d), t1 - t0
-            slope = jax.lax.stop_gradient(f1[jr] - f0[jr])
-            th0 = jax.lax.stop_gradient(jnp.clip(f0[jr] / -slope, 0.0, 1.0))
-            th = th0 - self.unclamped(d, self._solver_step(term, y, t0, t0 + th0 * h, args))[jr] / slope
+            slope = jax.lax.stop_gradient(g1 - g0)
+            th0 = jax.lax.stop_gradient(jnp.clip(g0 / -slope, 0.0, 1.0))
+            th = th0 - g(d, self._solver_step(term, y, t0, t0 + th0 * h, args)) / slope
             ta = t0 + jnp.clip(th, 0.0, 1.0) * h
             return self._solver_step(term, self._solver_step(term, y, t0, ta, args), ta, t1, args), ts
 
-        return [plain, in_window, onset, release]
+        return [plain] + ([in_window, onset, release] if self.split else []) + ([turn] if self.memory else [])
+
+    def _index(self, kind):
+        """The position in `_branches` of a step of kind `kind` (0 plain, 1 in an onset window, 2 onset,
+        3 release, 4 turn)."""
+        return kind if self.split else jnp.where(kind == 4, 1, 0)
 
     def vjp(self, cotangents, dyn, y0, t_star, t0, t1, kind, j, jr, f0, f1):
         """The step's vector-Jacobian product: `cotangents = (lambda_y, lambda_t*)` of `(y', t*')` to those
@@ -200,7 +222,8 @@ class _Replay(eqx.Module):
         fns = self._branches(t0, t1, j, jr, f0, f1)
         if len(fns) == 1:
             return jax.vjp(fns[0], dyn, y0, t_star)[1](cotangents)
-        return jax.lax.switch(kind, [lambda fn=fn: jax.vjp(fn, dyn, y0, t_star)[1](cotangents) for fn in fns])
+        return jax.lax.switch(self._index(kind), [lambda fn=fn: jax.vjp(fn, dyn, y0, t_star)[1](cotangents)
+                                                  for fn in fns])
 
     def jvp(self, tangents, dyn, y0, t_star, t0, t1, kind, j, jr, f0, f1):
         """The step's Jacobian-vector product: `tangents = (dyn_dot, y_dot, t*_dot)` of `(dyn, y0, t*)` to
@@ -208,7 +231,12 @@ class _Replay(eqx.Module):
         fns = self._branches(t0, t1, j, jr, f0, f1)
         if len(fns) == 1:
             return jax.jvp(fns[0], (dyn, y0, t_star), tangents)[1]
-        return jax.lax.switch(kind, [lambda fn=fn: jax.jvp(fn, (dyn, y0, t_star), tangents)[1] for fn in fns])
+        return jax.lax.switch(self._index(kind), [lambda fn=fn: jax.jvp(fn, (dyn, y0, t_star), tangents)[1]
+                                                  for fn in fns])
+
+    def rates(self, y):
+        """Every interface's scaled overlap rate at a scaled state (in units of the velocity scale)."""
+        return self._overlaps(y[self.n : 2 * self.n])
 
     def unclamped(self, dyn, y):
         """Every interface's unclamped force (`Stack.unclamped_forces`, N) at a scaled state."""
@@ -253,22 +281,22 @@ def _history(diff, t1s, scale, T, cfg: _SolveConfig):
 
 def _replay_of(stack, scale, T, cfg: _SolveConfig):
     """`(dyn, replay)`: the differentiable part of `stack` and its `_Replay`. Warns
-    (`GradientAccuracyWarning`, when the derivative is traced) for a law with memory."""
-    if stack.has_memory:
-        warnings.warn("derivatives through an elastic-plastic contact law (Thornton, Jackson-Green) do not treat "
-                      "the switch from loading to unloading: measured up to 3e-3 relative off central "
-                      "differences; check them against differences", GradientAccuracyWarning, stacklevel=2)
+    (`GradientAccuracyWarning`, when the derivative is traced) for a law with a `gradient_note`."""
+    for law in {type(law): law for law in stack.laws}.values():
+        if law.gradient_note:
+            warnings.warn(f"derivatives through the {law.name} contact law: {law.gradient_note}; check them "
+                          "against differences", GradientAccuracyWarning, stacklevel=2)
     dyn, static = eqx.partition(stack, eqx.is_inexact_array)
     return dyn, _Replay(static, scale, T, cfg.solver, stack.interface_mask(), jnp.asarray(stack.clamped()),
-                        stack.n, split=not _smooth_onsets(stack))
+                        stack.n, split=not _smooth_onsets(stack), memory=stack.has_memory)
 
 
 def _kinds(replay: _Replay, dyn, hist_t, ys, N):
     """`replay.classify`, or every step plain where nothing is split."""
-    if replay.split:
+    if replay.split or replay.memory:
         return replay.classify(dyn, hist_t, ys, N)
     zeros = jnp.zeros(hist_t.shape[0] - 1, int)
-    return zeros, zeros, zeros, jnp.full(hist_t.shape[0] - 1, -jnp.inf), jnp.zeros((hist_t.shape[0], replay.n))
+    return zeros, zeros, zeros, jnp.full(hist_t.shape[0] - 1, -jnp.inf), jnp.zeros((hist_t.shape[0], 2, replay.n))
 
 
 def _at_rows(stack, scale, n3):

@@ -38,6 +38,9 @@ class AbstractContactLaw(eqx.Module):
     """A law with memory (elastic–plastic) keeps one internal variable per interface, its largest overlap
     so far `q`, in the ODE state; its `force`, `elastic_force` and `potential` take `q` as a third
     argument, and it defines `memory_rate` and `dissipated_power` (`Thornton`)."""
+    #: where the replayed derivatives (`hertz_chain._adjoint`) are known to be less accurate than the solve
+    #: through this law, and why (warned, `GradientAccuracyWarning`, when such a derivative is traced); None
+    gradient_note: ClassVar[str | None] = None
 
     @abc.abstractmethod
     def elastic_force(self, delta: ArrayLike) -> Array:

@@ -65,10 +65,10 @@ class SolverError(HertzChainError, RuntimeError):
 
 
 class GradientAccuracyWarning(UserWarning):
-    """A derivative is computed where it is known to be less accurate than the solve: through the
-    elastic–plastic laws (Thornton, Jackson–Green) the replayed derivatives do not treat the switch from
-    loading to unloading (measured up to 3e-3 relative off central differences). Warned when such a
-    derivative is traced (once per compilation)."""
+    """A derivative is computed where it is known to be less accurate than the solve: through a contact
+    law with a `gradient_note` (Jackson–Green: its loading curve jumps at the start of its published fit,
+    which the replayed derivatives do not treat; measured up to 1.3e-3 relative off central differences).
+    Warned when such a derivative is traced (once per compilation)."""
 
 
 def check_parameter(ok: bool, name: str, value: object, allowed: str) -> None:
