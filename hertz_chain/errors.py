@@ -96,6 +96,8 @@ def check_number(value: object, name: str) -> float:
     tracer: the builders that take plain numbers are not differentiable, `TRACED`)."""
     if _traced(value):
         raise ParameterError(name, "a traced value", TRACED)
+    if isinstance(value, (str, bytes)):  # float("1e9") would pass, where arrays of strings are refused
+        raise ParameterError(name, value, "a number (SI units; quantities with units go in a stack file)")
     try:
         v = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):

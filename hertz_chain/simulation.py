@@ -113,7 +113,7 @@ from ._solve import (  # noqa: F401  (`_scaled_field`: the benchmarks' scipy com
 )
 from ._solver import UNTIL, Tolerances, UnrolledTsit5, _SolveConfig, _make_adjoint, make_solver
 from .contact import AbstractContactLaw
-from .errors import ParameterError, SolverError
+from .errors import ParameterError, SolverError, check_positive
 from .stack import Stack, State, at_impact
 from .status import Status
 
@@ -977,12 +977,8 @@ def simulate_impact(
     returns to zero (possibly before the overlap does), without it (`law.clamp=False`, tension
     allowed) where the overlap does. Default tolerances `rtol = atol = 1e-11`.
     """
-    v = float(impact_velocity)
-    m = float(effective_mass)
-    if not (np.isfinite(v) and v > 0):
-        raise ParameterError("impact_velocity", impact_velocity, "finite and > 0 (m/s)")
-    if not (np.isfinite(m) and m > 0):
-        raise ParameterError("effective_mass", effective_mass, "finite and > 0 (kg)")
+    v = check_positive(impact_velocity, "impact_velocity")  # (m/s)
+    m = check_positive(effective_mass, "effective_mass")  # (kg)
     stack = Stack(jnp.asarray([m]), [law], gravity=0.0, ground=True)
     sol = simulate(stack, at_impact(stack, v), solver=solver,
                    tolerances=tolerances or Tolerances(rtol=1e-11, atol=1e-11))

@@ -546,6 +546,19 @@ API_ROWS = [
     ("simulate_ts_past_t_max", lambda: __import__("hertz_chain").simulate(
         _stack(2), __import__("hertz_chain").at_impact(_stack(2), 1.0, 1e-3), ts=[0.0, 10.0]), ParameterError,
      "ts = 'last time 10 s' is invalid: times up to t_max = "),
+    # plain numbers of the Python API: a string, None or an array is one line (were float()'s TypeError or
+    # ValueError, or a string such as "1" accepted)
+    ("simulate_impact_none", lambda: __import__("hertz_chain").simulate_impact(__import__("hertz_chain").Hertz(1e9),
+                                                                               1.0, None), ParameterError,
+     "effective_mass = None is invalid: a number"),
+    ("simulate_impact_string", lambda: __import__("hertz_chain").simulate_impact(__import__("hertz_chain").Hertz(1e9),
+                                                                                 "1", 1.0), ParameterError,
+     "impact_velocity = '1' is invalid: a number (SI units"),
+    ("simulate_impact_array", lambda: __import__("hertz_chain").simulate_impact(__import__("hertz_chain").Hertz(1e9),
+                                                                                __import__("numpy").array([1.0, 2.0]), 1.0),
+     ParameterError, "impact_velocity"),
+    ("make_law_string_stiffness", lambda: __import__("hertz_chain").make_law("hertz", stiffness="1e9"),
+     ParameterError, "stiffness = '1e9' is invalid: a number (SI units"),
     ("check_output_missing", lambda: _paths.check_output_path("/nonexistent/r.nc", "--output", (".nc",), False),
      OutputPathError, "--output"),
     ("check_output_suffix", lambda: _paths.check_output_path("r.txt", "--output", (".nc",), False),
