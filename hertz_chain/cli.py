@@ -460,6 +460,9 @@ def check(
     from .standards import read_test_file, standards_table
 
     if standard is not None and standard.strip().lower() == "list":
+        if stack_file is not None or plot is not None or overrides:  # nothing is checked: say so
+            typer.echo("hertz-chain: note: --standard list prints the table only; the stack file, --plot and "
+                       "--set are not used", err=True)
         if as_json:
             import dataclasses
 

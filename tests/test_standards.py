@@ -189,6 +189,9 @@ def test_cli_check_example_passes_and_list():
     assert res.exit_code == 0 and all(c.name in res.stdout for c in conditions())
     res = runner.invoke(app, ["check", "--standard", "list", "--json"])
     assert res.exit_code == 0 and [r["name"] for r in json.loads(res.stdout)] == [c.name for c in conditions()]
+    # a stack file given with it is not checked: said on stderr (it was silently ignored)
+    res = runner.invoke(app, ["check", str(EXAMPLE), "--standard", "list"])
+    assert res.exit_code == 0 and "the stack file, --plot and --set are not used" in res.stderr
 
 
 def test_cli_check_with_nothing_judged_is_not_a_failure(tmp_path):
