@@ -16,7 +16,7 @@ from . import _config  # noqa: F401  (float64)
 from ._scaling import FieldArgs
 from ._solve import _diffeqsolve, _scaled_field, _solve_record
 from ._solver import _SolveConfig
-from ._tracking import T_IN, T_OUT
+from ._tracking import DELTA_OUT, T_IN, T_OUT
 from .errors import GradientAccuracyWarning
 
 # ==================================================================== reverse mode: replay the accepted steps
@@ -301,12 +301,16 @@ def _kinds(replay: _Replay, dyn, hist_t, ys, N):
 
 def _at_rows(stack, scale, n3):
     """The state-dependent columns of `_Contacts.rows` (overlap, its rate, the lower and upper bodies'
-    velocities) of each interface `j` at the scaled state `Y[j]` (linear in it)."""
+    velocities, and with a law with memory its memory: columns `DELTA_OUT` on) of each interface `j` at the
+    scaled state `Y[j]` (linear in it). The memory reaches the launch through the contact's end time
+    (`_end_of_contacts`), and that through gravity (`v + g (t_r - t_end)`)."""
 
     def at_rows(Y):
-        x, v, _ = stack.split(Y[:, :n3] * scale[None, :])
+        Y = Y[:, :n3] * scale[None, :]
+        x, v, _ = stack.split(Y)
         v_lo = jnp.concatenate([jnp.zeros(1, v.dtype), jnp.diagonal(v, offset=-1)])
-        return (jnp.diagonal(stack.overlaps(x)), jnp.diagonal(stack.overlap_rates(v)), v_lo, jnp.diagonal(v))
+        cols = (jnp.diagonal(stack.overlaps(x)), jnp.diagonal(stack.overlap_rates(v)), v_lo, jnp.diagonal(v))
+        return cols + ((jnp.diagonal(stack.memory(Y)),) if stack.has_memory else ())
 
     return at_rows
 
@@ -337,9 +341,9 @@ def _replay_bwd(residuals, g, perturbed, diff, t1s, scale, T, cfg: _SolveConfig)
     if g["y_fin"] is not None:
         ct_hist = ct_hist.at[N].add(g["y_fin"])
     rows_ct = g["contacts"].rows
-    if rows_ct is not None:  # overlap, rate and velocities at the recorded point: linear in that state
+    if rows_ct is not None:  # overlap, rate, velocities (memory) at the recorded point: linear in that state
         _, vjp = jax.vjp(_at_rows(stack, scale, n3), hist_y[idx])
-        (ct_Y,) = vjp((rows_ct[:, 2], rows_ct[:, 3], rows_ct[:, 4], rows_ct[:, 5]))
+        (ct_Y,) = vjp(tuple(rows_ct[:, c] for c in range(DELTA_OUT, rows_ct.shape[1])))
         ct_hist = ct_hist.at[idx].add(jnp.where(valid[:, None], ct_Y, 0.0))
     dyn, replay = _replay_of(stack, scale, T, cfg)
     # The onset proxies (`resolve_onsets`, entries state_size:) feed nothing back into the motion and no output
@@ -407,7 +411,7 @@ def _forward_jvp(primals, tangents):
     t_core["y_fin"] = jnp.zeros_like(core["y_fin"]).at[:n3].set(ty)
     _, cols = jax.jvp(_at_rows(stack, scale, n3), (hist_y[idx][:, :n3],), (at_idx,))
     rows = t_core["contacts"].rows
-    for c, col in zip(range(2, 6), cols):
+    for c, col in zip(range(DELTA_OUT, rows.shape[1]), cols):
         rows = rows.at[:, c].set(jnp.where(valid, col, 0.0))
     t_core["contacts"] = eqx.tree_at(lambda c: c.rows, t_core["contacts"], rows)
     return core, t_core

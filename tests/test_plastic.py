@@ -378,11 +378,13 @@ def test_fit_and_sweep_design_maps_take_a_plastic_law(tmp_path):
 
 
 def test_thorntons_gradient_matches_central_differences_and_jackson_green_warns():
-    """The derivative through Thornton's law (reverse mode) against central differences of solves at 1e-13
-    (step 1e-4 relative): within 2e-5 relative, because the replay splits each step in which a contact turns
-    from loading to unloading (`_adjoint._Replay`, "turn": the stiffer unloading curve takes over where the
-    overlap rate is zero; without the split a review measured 3.6e-4, 3.2e-3 and 3.3e-5 on this stack) and
-    the onsets, where the memory's rate jumps. Jackson-Green's loading curve jumps where its published fit
+    """The derivative through Thornton's law (reverse mode, under gravity, the default) against central
+    differences of solves at 1e-13 (step 1e-4 relative): within 2e-5 relative (measured 3.5e-6), because the
+    replay splits each step in which a contact turns from loading to unloading (`_adjoint._Replay`, "turn":
+    the stiffer unloading curve takes over where the overlap rate is zero; without the split a review
+    measured up to 3.2e-3 on this stack without gravity), and the onsets, where the memory's rate jumps, and
+    because the contacts' recorded memory carries its derivative to the contact's end time, which gravity
+    brings into the launch velocity (without it 5.2e-4, a second review). Jackson-Green's loading curve jumps where its published fit
     starts, which the replay does not treat: the replay both modes build (`_adjoint._replay_of`) warns
     `GradientAccuracyWarning` for it, not for Thornton or an elastic law."""
     import warnings
@@ -397,7 +399,7 @@ def test_thorntons_gradient_matches_central_differences_and_jackson_green_warns(
                            effective_radius=2.5e-3)
 
     def top(m, tol=None):
-        stack = hc.Stack(m, thornton, gravity=0.0)
+        stack = hc.Stack(m, thornton)
         return hc.launch_velocity(stack, hc.at_impact(stack, 1.0, 1e-3), tolerances=tol)[-1]
 
     m = jnp.asarray([0.1, 0.05, 0.02])
