@@ -174,8 +174,9 @@ class _Replay(eqx.Module):
         return kind, j, jr, star, F
 
     def _branches(self, t0, t1, j, jr, f0, f1) -> list:
-        """The replays `(dyn, y, t*) -> (y', t*')` of the step `t0 -> t1`, one per kind (class docstring;
-        only the plain one without `split`): `j`, `jr`, `f0`, `f1` from `classify`."""
+        """The replays `(dyn, y, t*) -> (y', t*')` of the step `t0 -> t1`, one per kind this replay has
+        (class docstring: the window, onset and release with `split`, the turn with `memory`; `_index`
+        maps a kind to its position): `j`, `jr`, `f0`, `f1` from `classify`."""
 
         def plain(d, y, ts):
             return self._solver_step(dfx.ODETerm(_scaled_field), y, t0, t1, self._args(d)), ts
@@ -218,7 +219,7 @@ class _Replay(eqx.Module):
         """The step's vector-Jacobian product: `cotangents = (lambda_y, lambda_t*)` of `(y', t*')` to those
         of `(dyn, y0, t*)`. The kind of step (class docstring) comes from `classify`, outside the
         differentiation, so a plain step costs what it did before onsets were treated; `f0`, `f1`: the
-        unclamped forces at the step's ends."""
+        unclamped forces and the overlap rates at the step's ends (`(2, n)`, from `classify`)."""
         fns = self._branches(t0, t1, j, jr, f0, f1)
         if len(fns) == 1:
             return jax.vjp(fns[0], dyn, y0, t_star)[1](cotangents)
