@@ -602,7 +602,7 @@ def _guard_forward_jvp(primals, tangents):
     return _guard_forward(v, bad), eqx.error_if(tangents[0] * jnp.where(bad, jnp.nan, 1.0), bad, _NOT_ENDED)
 
 
-# `replay` is a Python bool: static. Used under the caller's trace (the top level runs a `_Launch`) and for
+# `replay` ("reverse", "forward" or False, `_launch_impl`) is static. Used under the caller's trace (the top level runs a `_Launch`) and for
 # options that cannot be hashed. At the top level compiled with `_config.solve_compiler_options()` (JAX
 # takes options only there); not kept on disk by `_export` as `simulate`'s solve is: the exported call's checks cost
 # ~0.3 ms per call, more than this function's whole fixed cost (JAX's compilation cache still keeps it)
@@ -807,7 +807,7 @@ class _Program:
     the program out of JAX's persistent cache), with compile options (CPU ones on the CPU backend only);
     under the caller's own `jit`/`vmap`/`grad`, `eqx.error_if` in the caller's program, no options."""
 
-    def __init__(self, stack: Stack, state: State, cfg: _SolveConfig, replay: bool):
+    def __init__(self, stack: Stack, state: State, cfg: _SolveConfig, replay):
         all_leaves, tree = jax.tree_util.tree_flatten((stack, state))
         is_array = [eqx.is_array(x) for x in all_leaves]
         self.array_at = [i for i, a in enumerate(is_array) if a]
@@ -856,7 +856,7 @@ class _Launch:
         self.program, self.numbers, self.shapes, self.prepared_for = program, numbers, shapes, prepared_for
 
     @classmethod
-    def of(cls, stack: Stack, state: State, t_max, cfg: _SolveConfig, replay: bool,
+    def of(cls, stack: Stack, state: State, t_max, cfg: _SolveConfig, replay,
            shared: bool = False) -> "_Launch | None":
         """The launch of these (checked) arguments, on the program compiled for their structure (made on
         the first use of that structure, `_PROGRAMS`). `shared`: None where the program cannot be kept
