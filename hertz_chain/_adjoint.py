@@ -15,7 +15,7 @@ import numpy as np
 from . import _config  # noqa: F401  (float64)
 from ._scaling import FieldArgs
 from ._solve import _diffeqsolve, _scaled_field, _solve_record
-from ._solver import _SolveConfig
+from ._solver import UnrolledERK, _SolveConfig
 from ._tracking import DELTA_OUT, T_IN, T_OUT
 from .errors import GradientAccuracyWarning
 
@@ -96,26 +96,30 @@ class _Replay(eqx.Module):
         their rates from a scaled derivative (`Stack.overlaps`: linear in the positions)."""
         return self.stack_static.overlaps(y[: self.n])
 
-    def _solver_step(self, term, y, a, b, args):
-        return self.solver.step(term, a, b, y, args, self.solver.init(term, a, b, y, args), False)[0]
+    def _solver_step(self, term, y, a, b, args, rolled: str | None = None):
+        """The new state of one step of the forward solve's solver; `rolled` (a diffrax `scan_kind`): the
+        same method with its stages in diffrax's loop (`_rolled`)."""
+        solver = self.solver if rolled is None else _rolled(self.solver, rolled)
+        return solver.step(term, a, b, y, args, solver.init(term, a, b, y, args), False)[0]
 
-    def in_s(self, dyn, y, sa, sb, t_star):
+    def in_s(self, dyn, y, sa, sb, t_star, rolled: str | None = None):
         """`_ONSET_SUBSTEPS` solver steps in `s` from `sa` to `sb` (`_s_field`)."""
         args, term = (self._args(dyn), t_star), dfx.ODETerm(_s_field)
         ds = (sb - sa) / _ONSET_SUBSTEPS
-        return jax.lax.fori_loop(0, _ONSET_SUBSTEPS,
-                                 lambda i, y: self._solver_step(term, y, sa + i * ds, sa + (i + 1) * ds, args), y)
+        return jax.lax.fori_loop(
+            0, _ONSET_SUBSTEPS, lambda i, y: self._solver_step(term, y, sa + i * ds, sa + (i + 1) * ds, args, rolled),
+            y)
 
     def approach(self, dyn, y, t):
         """Every interface's scaled overlap and its rate at a state (`(2, n)`)."""
         return jnp.stack([self._overlaps(y), self._overlaps(_scaled_field(t, y, self._args(dyn)))])
 
-    def onset(self, dyn, y0, t0, t1, t_star, j):
+    def onset(self, dyn, y0, t0, t1, t_star, j, rolled: str | None = None):
         """The step `t0 -> t1` in which contact `j` closes: `(y', t*')` (class docstring)."""
         eps, h = _ONSET_OVERLAP, t1 - t0
         d0, rate0 = self.approach(dyn, y0, t0)[:, j]
         tau_a = jnp.where(d0 < -eps, jnp.clip((-eps - d0) / jnp.where(rate0 > 0, rate0, 1.0), 0.0, h), 0.0)
-        ya = self._solver_step(dfx.ODETerm(_scaled_field), y0, t0, t0 + tau_a, self._args(dyn))
+        ya = self._solver_step(dfx.ODETerm(_scaled_field), y0, t0, t0 + tau_a, self._args(dyn), rolled)
         f = _scaled_field(t0 + tau_a, ya, self._args(dyn))
         rate = self._overlaps(f)[j]  # the closing interface's scaled overlap rate (> 0)
         rate = jnp.where(rate > 0, rate, 1.0)
@@ -126,7 +130,7 @@ class _Replay(eqx.Module):
         sa = jnp.maximum(tau_b - tau_star, 0.0) ** (1.0 / _ONSET_POWER)
         sb = jnp.maximum(h - tau_star, 0.0) ** (1.0 / _ONSET_POWER)
         new_star = t0 + tau_star
-        return self.in_s(dyn, yb, sa, sb, new_star), new_star
+        return self.in_s(dyn, yb, sa, sb, new_star, rolled), new_star
 
     def closing(self, y0, y1, h):
         """Whether a contact closes between two accepted states of the forward solve `h` apart (open at
@@ -173,29 +177,36 @@ class _Replay(eqx.Module):
             jr = jnp.where(kind == 4, jnp.argmax(turn, axis=1), jr)
         return kind, j, jr, star, F
 
-    def _branches(self, t0, t1, j, jr, f0, f1) -> list:
+    def _branches(self, t0, t1, kind, j, jr, f0, f1, rolled: str) -> list:
         """The replays `(dyn, y, t*) -> (y', t*')` of the step `t0 -> t1`, one per kind this replay has
-        (class docstring: the window, onset and release with `split`, the turn with `memory`; `_index`
-        maps a kind to its position): `j`, `jr`, `f0`, `f1` from `classify`."""
+        (class docstring: the window, onset and release with `split`, the turn with `memory`, a release and
+        a turn in one branch; `_index` maps a kind to its position): `kind`, `j`, `jr`, `f0`, `f1` from
+        `classify`; `rolled`: the `scan_kind` of the onsets' and the kinks' steps (`_rolled`), the
+        rarest kinds: written out, the rare kinds made most of the compiled derivative (Thornton's
+        gradient compiled in ~31 s, ~16 s rolled; the windows' steps, several per onset, stay written
+        out: rolled they cost ~10 % of a Tsuji gradient's run time)."""
 
         def plain(d, y, ts):
             return self._solver_step(dfx.ODETerm(_scaled_field), y, t0, t1, self._args(d)), ts
 
         def in_window(d, y, ts):
             sa, sb = (jnp.maximum(t - ts, 0.0) ** (1.0 / _ONSET_POWER) for t in (t0, t1))
-            return self.in_s(d, y, sa, sb, ts), ts
+            return self.in_s(d, y, sa, sb, ts), ts  # written out: the most frequent of the rare kinds
 
         def onset(d, y, ts):
-            return self.onset(d, y, t0, t1, ts, j)
+            return self.onset(d, y, t0, t1, ts, j, rolled)
 
-        def release(d, y, ts):
-            # split where the unclamped force is zero (the clamp's kink)
-            return split_where(d, y, ts, lambda d, y: self.unclamped(d, y)[jr], f0[0, jr], f1[0, jr])
-
-        def turn(d, y, ts):
-            # a contact with memory turns from loading to unloading where its overlap rate is zero (the kink
-            # of its force: the unloading curve is stiffer), split there as a release is
-            return split_where(d, y, ts, lambda d, y: self.rates(y)[jr], f0[1, jr], f1[1, jr])
+        def kink(d, y, ts):
+            # a release: split where the unclamped force is zero (the clamp's kink); a turn: a contact with
+            # memory turns from loading to unloading where its overlap rate is zero (the kink of its force: the
+            # unloading curve is stiffer), split there the same way (one branch: one compiled copy)
+            if not self.memory:
+                return split_where(d, y, ts, lambda d, y: self.unclamped(d, y)[jr], f0[0, jr], f1[0, jr])
+            if not self.split:
+                return split_where(d, y, ts, lambda d, y: self.rates(y)[jr], f0[1, jr], f1[1, jr])
+            row = jnp.where(kind == 4, 1, 0)
+            g = lambda d, y: jnp.where(row == 1, self.rates(y)[jr], self.unclamped(d, y)[jr])  # noqa: E731
+            return split_where(d, y, ts, g, f0[row, jr], f1[row, jr])
 
         def split_where(d, y, ts, g, g0, g1):
             # two solver steps that meet where `g` (linear between the step's ends, `g0`, `g1`) is zero, by one
@@ -204,23 +215,24 @@ class _Replay(eqx.Module):
             term, args, h = dfx.ODETerm(_scaled_field), self._args(d), t1 - t0
             slope = jax.lax.stop_gradient(g1 - g0)
             th0 = jax.lax.stop_gradient(jnp.clip(g0 / -slope, 0.0, 1.0))
-            th = th0 - g(d, self._solver_step(term, y, t0, t0 + th0 * h, args)) / slope
+            th = th0 - g(d, self._solver_step(term, y, t0, t0 + th0 * h, args, rolled)) / slope
             ta = t0 + jnp.clip(th, 0.0, 1.0) * h
-            return self._solver_step(term, self._solver_step(term, y, t0, ta, args), ta, t1, args), ts
+            ya = self._solver_step(term, y, t0, ta, args, rolled)
+            return self._solver_step(term, ya, ta, t1, args, rolled), ts
 
-        return [plain] + ([in_window, onset, release] if self.split else []) + ([turn] if self.memory else [])
+        return [plain] + ([in_window, onset] if self.split else []) + ([kink] if self.split or self.memory else [])
 
     def _index(self, kind):
         """The position in `_branches` of a step of kind `kind` (0 plain, 1 in an onset window, 2 onset,
-        3 release, 4 turn)."""
-        return kind if self.split else jnp.where(kind == 4, 1, 0)
+        3 release, 4 turn; the last two one branch)."""
+        return jnp.minimum(kind, 3) if self.split else jnp.where(kind == 4, 1, 0)
 
     def vjp(self, cotangents, dyn, y0, t_star, t0, t1, kind, j, jr, f0, f1):
         """The step's vector-Jacobian product: `cotangents = (lambda_y, lambda_t*)` of `(y', t*')` to those
         of `(dyn, y0, t*)`. The kind of step (class docstring) comes from `classify`, outside the
         differentiation, so a plain step costs what it did before onsets were treated; `f0`, `f1`: the
         unclamped forces and the overlap rates at the step's ends (`(2, n)`, from `classify`)."""
-        fns = self._branches(t0, t1, j, jr, f0, f1)
+        fns = self._branches(t0, t1, kind, j, jr, f0, f1, "checkpointed")
         if len(fns) == 1:
             return jax.vjp(fns[0], dyn, y0, t_star)[1](cotangents)
         return jax.lax.switch(self._index(kind), [lambda fn=fn: jax.vjp(fn, dyn, y0, t_star)[1](cotangents)
@@ -229,7 +241,7 @@ class _Replay(eqx.Module):
     def jvp(self, tangents, dyn, y0, t_star, t0, t1, kind, j, jr, f0, f1):
         """The step's Jacobian-vector product: `tangents = (dyn_dot, y_dot, t*_dot)` of `(dyn, y0, t*)` to
         those of `(y', t*')` (the forward counterpart of `vjp`: the same replays)."""
-        fns = self._branches(t0, t1, j, jr, f0, f1)
+        fns = self._branches(t0, t1, kind, j, jr, f0, f1, "lax")
         if len(fns) == 1:
             return jax.jvp(fns[0], (dyn, y0, t_star), tangents)[1]
         return jax.lax.switch(self._index(kind), [lambda fn=fn: jax.jvp(fn, (dyn, y0, t_star), tangents)[1]
@@ -245,6 +257,14 @@ class _Replay(eqx.Module):
         Y = y * self.scale
         x, v, _ = stack.split(Y)
         return stack.unclamped_forces(stack.overlaps(x), stack.overlap_rates(v), stack.memory(Y))
+
+
+def _rolled(solver, scan_kind: str):
+    """diffrax's own solver of an `UnrolledERK`'s method (`stock`: its stages in a loop, so that the
+    compiled program holds one copy of the vector field per step rather than one per stage), with
+    `scan_kind` (`"checkpointed"` for reverse mode, `"lax"` for forward mode); any other solver itself.
+    The same arithmetic to rounding."""
+    return solver.stock(scan_kind=scan_kind) if isinstance(solver, UnrolledERK) else solver
 
 
 def _smooth_onsets(stack) -> bool:
