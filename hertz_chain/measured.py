@@ -293,9 +293,10 @@ class Comparison:
     def to_dict(self) -> dict:
         """JSON-ready summary (SI units, plus g and ms where the key says so)."""
         def metrics(pm: PulseMetrics) -> dict:
-            return {"peak_g": pm.peak_g, "duration_10_ms": pm.duration_10 * 1e3,
-                    "equivalent_half_sine_ms": pm.equivalent_half_sine_duration * 1e3,
-                    "rise_time_ms": pm.rise_time * 1e3, "delta_v_mps": pm.delta_v_main}
+            out = {"peak_g": pm.peak_g, "duration_10_ms": pm.duration_10 * 1e3,
+                   "equivalent_half_sine_ms": pm.equivalent_half_sine_duration * 1e3,
+                   "rise_time_ms": pm.rise_time * 1e3, "delta_v_mps": pm.delta_v_main}
+            return {k: (float(v) if np.isfinite(v) else None) for k, v in out.items()}  # None: not measured
         from .spectrum import SRSOptions
 
         o = self.srs_options if self.srs_options is not None else SRSOptions()
@@ -308,7 +309,7 @@ class Comparison:
             "cfc": self.cfc,
             "measured": mm,
             "model": cm,
-            "relative_difference": {k: (cm[k] - mm[k]) / mm[k] if mm[k] else None for k in mm},
+            "relative_difference": {k: (cm[k] - mm[k]) / mm[k] if mm[k] and cm[k] is not None else None for k in mm},
             "sprague_geers": {"magnitude": M, "phase": P, "comprehensive": C},
             "srs": {"type": o.kind, "peak": {"abs": "maximax", "pos": "positive", "neg": "negative"}[o.peak],
                     "q": o.Q, "per_octave": o.per_octave, "units": "g" if o.kind == "acceleration" else "m/s",

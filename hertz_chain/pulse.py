@@ -45,6 +45,8 @@ from __future__ import annotations
 
 import dataclasses
 
+import math
+
 import numpy as np
 
 from .constants import G0
@@ -76,7 +78,7 @@ class PulseMetrics:
     | `time_of_peak` | s | time of the (first) peak sample |
     | `t_start_10`, `t_end_10` | s | ends of the main pulse at `duration_level` |
     | `duration_10` | s | `t_end_10 − t_start_10` |
-    | `rise_time` | s | `rise_levels[0]` → `rise_levels[1]` on the rising edge |
+    | `rise_time` | s | `rise_levels[0]` → `rise_levels[1]` on the rising edge; NaN where the record starts above `rise_levels[1]` of the peak (no rising edge in it) |
     | `delta_v` | m/s | `∫ a dt` over the record (signed) |
     | `delta_v_main` | m/s | `∫ a dt` over the main lobe (signed) |
     | `equivalent_half_sine_duration` | s | `π·abs(delta_v_main)/(2·peak)` |
@@ -272,6 +274,8 @@ def pulse_metrics(
     m = i_lo + int(np.argmax(y[i_lo : ip + 1] >= hi * peak))  # exists: y[ip] = peak > hi·peak
     # y[m-1] < hi·peak <= y[m] (for m == i_lo > 0, y[m-1] < lo·peak); m == 0 only when truncated
     t_hi = float(t[0]) if m == 0 else _cross(t, y, m - 1, hi * peak)
+    # a record that starts above `hi` has no rising edge: its rise time is not measured (was 0)
+    rise_time = math.nan if m == 0 else t_hi - t_lo
 
     # integrals of the interpolant
     if velocity is not None:
@@ -300,7 +304,7 @@ def pulse_metrics(
         t_start_10=t0,
         t_end_10=t1,
         duration_10=t1 - t0,
-        rise_time=t_hi - t_lo,
+        rise_time=rise_time,
         delta_v=dv,
         delta_v_main=dv_main,
         equivalent_half_sine_duration=np.pi * abs(dv_main) / (2.0 * peak),

@@ -61,7 +61,7 @@ def _pulse_dict(pm) -> dict | None:
         "peak_g": pm.peak_g,
         "time_of_peak_s": pm.time_of_peak,
         "duration_ms": pm.duration_10 * 1e3,
-        "rise_time_ms": pm.rise_time * 1e3,
+        "rise_time_ms": _num(pm.rise_time * 1e3),
         "delta_v_mps": pm.delta_v_main,
         "equivalent_half_sine_ms": pm.equivalent_half_sine_duration * 1e3,
         "n_pulses": pm.n_pulses,
@@ -525,7 +525,8 @@ def compare_table(c) -> str:
            f"{'':<18} {'measured':>12} {'model':>12} {'model/meas - 1':>15}"]
     for label, unit, key in rows:
         m, x, r = d["measured"][key], d["model"][key], d["relative_difference"][key]
-        out.append(f"{label + ' (' + unit + ')':<18} {m:>12.5g} {x:>12.5g} {'' if r is None else f'{100 * r:+.2f} %':>15}")
+        m, x = ("—" if v is None else f"{v:.5g}" for v in (m, x))  # None: not measured (a rise cut by the record)
+        out.append(f"{label + ' (' + unit + ')':<18} {m:>12} {x:>12} {'' if r is None else f'{100 * r:+.2f} %':>15}")
     sg = d["sprague_geers"]
     out.append(f"Sprague-Geers: magnitude {sg['magnitude']:+.4f}, phase {sg['phase']:.4f}, comprehensive "
                f"{sg['comprehensive']:.4f}")
