@@ -89,6 +89,14 @@ def _one_line(text: object) -> str:
     return " ".join(str(text).split())
 
 
+
+def _same_file(a, b, exists: bool = True) -> bool:
+    """Whether the paths `a` and `b` name the same file, through symbolic links too (a link to the input
+    stack file given as `--write` replaced the input); `exists`: only when `b` exists."""
+    if exists and not os.path.exists(b):
+        return False
+    return os.path.realpath(a) == os.path.realpath(b)
+
 def _fail(message: str) -> None:
     typer.echo(f"hertz-chain: error: {_one_line(message)}", err=True)
     raise typer.Exit(code=EXIT_BAD_INPUT)
@@ -326,11 +334,11 @@ def optimize(
     from .optimization import read_optimize_file
 
     try:
-        if write is not None and plot is not None and os.path.abspath(write) == os.path.abspath(plot):
+        if write is not None and plot is not None and _same_file(write, plot, exists=False):
             _fail(f"--plot {plot}: the same file as --write")
         if write is not None:
             _paths.check_output_path(write, "--write", (".toml",), force)
-            if os.path.exists(stack_file) and os.path.abspath(write) == os.path.abspath(stack_file):
+            if _same_file(write, stack_file):
                 _fail(f"--write {write}: the input stack file itself; write the optimum to another file")
         if plot is not None:
             _paths.check_output_path(plot, "--plot", PLOT_SUFFIXES, force)
@@ -598,11 +606,11 @@ def fit(
 
     try:
         _check_align_cfc(align, cfc)
-        if write is not None and plot is not None and os.path.abspath(write) == os.path.abspath(plot):
+        if write is not None and plot is not None and _same_file(write, plot, exists=False):
             _fail(f"--plot {plot}: the same file as --write")
         if write is not None:
             _paths.check_output_path(write, "--write", (".toml",), force)
-            if os.path.exists(stack_file) and os.path.abspath(write) == os.path.abspath(stack_file):
+            if _same_file(write, stack_file):
                 _fail(f"--write {write}: the input stack file itself; write the fitted stack to another file")
         if plot is not None:
             _paths.check_output_path(plot, "--plot", PLOT_SUFFIXES, force)

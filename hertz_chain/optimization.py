@@ -308,14 +308,17 @@ class _Space:
 
         u = jnp.clip(u, 0.0, 1.0)
         lin = self.lo + u * (self.hi - self.lo)
-        lg = self.lo * (self.hi / self.lo) ** u if np.all(self.lo[self.log] > 0) else lin
-        return jnp.where(self.log, lg, lin)
+        # the log branch only where it applies (elsewhere 1 ** u): a bound of 0 on a linear slot (a gap) made
+        # it 0 * inf ** u, whose NaN reached the gradient through `where` (the search stopped at its start)
+        log = self.log & (self.lo > 0)
+        lo, hi = (np.where(log, b, 1.0) for b in (self.lo, self.hi))
+        return jnp.where(log, lo * (hi / lo) ** u, lin)
 
     def to_u(self, x) -> np.ndarray:
         x = np.clip(np.asarray(x, dtype=float), self.lo, self.hi)
         with np.errstate(divide="ignore", invalid="ignore"):
             lg = np.log(x / self.lo) / np.log(self.hi / self.lo)
-        return np.clip(np.where(self.log, lg, (x - self.lo) / (self.hi - self.lo)), 0.0, 1.0)
+        return np.clip(np.where(self.log & (self.lo > 0), lg, (x - self.lo) / (self.hi - self.lo)), 0.0, 1.0)
 
 
 def _start_masses(spec: StackSpec, n: int) -> np.ndarray:
@@ -879,6 +882,8 @@ class OptimizeResult:
     doc: dict = dataclasses.field(repr=False, default_factory=dict)
     source: str | None = None
     gaps: tuple[float, ...] = ()
+    #: name -> why a design of `rigid_designs` could not be simulated (its value there is None)
+    rigid_design_notes: dict = dataclasses.field(default_factory=dict)
 
     @property
     def masses(self) -> np.ndarray:
@@ -925,6 +930,7 @@ class OptimizeResult:
             "top_pulse": rep.get("pulses", [None])[-1] if isinstance(rep.get("pulses"), list) else None,
             "start": brief(self.start),
             "rigid_designs": {k: brief(v) for k, v in self.rigid_designs.items()},
+            "rigid_design_notes": dict(self.rigid_design_notes),
             "convergence": self.convergence,
             "evaluations": self.evaluations,
             "seconds": self.seconds,
@@ -986,18 +992,19 @@ def _projected_gradient(ev: _Evaluator, u: np.ndarray) -> float:
     return float(np.linalg.norm(u - np.clip(u - g, 0.0, 1.0), ord=np.inf))
 
 
-def _rigid_designs(space: _Space, best_masses: np.ndarray) -> dict:
+def _rigid_designs(space: _Space, best_masses: np.ndarray) -> tuple[dict, dict]:
     """The paper's MVG (Eq 15) and MET (Eq 25) stacks with the optimum's end masses, simulated under the
-    same contacts (the file's, with the masses replaced)."""
+    same contacts (the file's, with the masses replaced): `(reports, notes)`, a report None where the design
+    could not be simulated and the note says why."""
     from ._design import with_masses
     from .rigid import met_design, mvg_masses
     from .workflow import run_spec
 
     e = space.spec.contact.default.restitution
     m1, mn, n = float(best_masses[0]), float(best_masses[-1]), len(best_masses)
-    out = {}
+    out, notes = {}, {}
     if n < 2 or not mn < m1 or space.dm.chain:
-        return out
+        return out, notes
     designs = {"mvg": mvg_masses(mn / m1, n, m1)}
     if e is not None and e < 1:
         try:
@@ -1007,9 +1014,9 @@ def _rigid_designs(space: _Space, best_masses: np.ndarray) -> dict:
     for name, masses in designs.items():
         try:
             out[name] = run_spec(with_masses(space.spec, masses))
-        except Exception:
-            out[name] = None
-    return out
+        except Exception as exc:  # e.g. the file's per-gap list does not fit the design's number of masses
+            out[name], notes[name] = None, f"{len(masses)} masses: {exc}"
+    return out, notes
 
 
 def prepare(path: str | Path):
@@ -1067,7 +1074,7 @@ def optimize(path: str | Path) -> OptimizeResult:
         doc_best.setdefault("solver", {})["until"] = "launch"
         report = run_spec(parse_stack(doc_best, source=str(path)))
     start = run_spec(spec)
-    rigid = _rigid_designs(space, np.asarray(report.masses))
+    rigid, rigid_notes = _rigid_designs(space, np.asarray(report.masses))
     pg = _projected_gradient(ev, top.u)  # NaN on the derivative-free path (None in the JSON)
     agree = sum(abs(r.value - top.value) <= 1e-6 * max(abs(top.value), 1e-2) for r in runs)
     active = [s.label + (" (lower)" if ui <= 1e-9 else " (upper)") for s, ui in zip(space.slots, top.u)
@@ -1103,7 +1110,12 @@ def optimize(path: str | Path) -> OptimizeResult:
     # gradient's own accuracy, ~1e-6 relative) has converged too (L-BFGS-B reports it as "ABNORMAL")
     stationary = math.isfinite(pg) and pg <= PG_TOLERANCE * max(1.0, abs(top.value))
     status = OptimizeStatus.CONVERGED if (top.success or stationary) else OptimizeStatus.NOT_CONVERGED
-    why = "" if status.ok else f"the search stopped: {top.message}"
+    message = str(top.message).strip().rstrip(":")
+    if message.upper().startswith("ABNORMAL"):  # scipy's L-BFGS-B says only "ABNORMAL: " (a review)
+        message = ("the line search made no progress (L-BFGS-B: ABNORMAL) with the projected gradient still at "
+                   f"{pg:.3g}: the objective or its gradient is not smooth or accurate enough there; tighter "
+                   "[solver] tolerances, other bounds or more starts may help")
+    why = "" if status.ok else f"the search stopped: {message}"
     if top.violation > _LIMIT_TOLERANCE:
         status = OptimizeStatus.NOT_CONVERGED
         broken = ", ".join(f"{k} {v['value']:.6g} over {v['limit']:.6g}" for k, v in limits.items()
@@ -1139,7 +1151,7 @@ def optimize(path: str | Path) -> OptimizeResult:
     return OptimizeResult(
         status=status, objective=problem.objective, objective_value=float(value), n=space.n,
         variables={s.label: float(v) for s, v in zip(space.slots, x)}, report=report, start=start,
-        rigid_designs=rigid, convergence=convergence, evaluations=sum(e.count for e in evaluators),
+        rigid_designs=rigid, rigid_design_notes=rigid_notes, convergence=convergence, evaluations=sum(e.count for e in evaluators),
         seconds=time.perf_counter() - t0, doc=doc_best, source=str(path),
         gaps=tuple(float(g) for g in np.asarray(space.dm.fields(x)["stack.gaps"])),
     )

@@ -474,9 +474,9 @@ def _end_mass_note(cmp) -> str | None:
 def optimize_table(result) -> str:
     """An `optimize.OptimizeResult` as text: the best stack against the start and the paper's designs,
     the varied values and the convergence."""
-    def row(name, rep):
+    def row(name, rep, why=None):
         if rep is None:
-            return f"  {name:<22} (could not be simulated)"
+            return f"  {name:<22} (could not be simulated{': ' + why if why else ''})"
         tp = rep.top_pulse
         pulse = "" if tp is None else f"   peak {tp.peak / G0:9.4g} g, half-sine {tp.equivalent_half_sine_duration * 1e3:.4g} ms"
         return f"  {name:<22} gain {rep.top_velocity_gain:.6f}{pulse}"
@@ -488,7 +488,8 @@ def optimize_table(result) -> str:
              "varied:"]
     lines += [f"  {k} = {v:.9g}" for k, v in result.variables.items()]
     lines += ["", "compared under the same contacts:", row("optimum", result.report), row("start (the file)", result.start)]
-    lines += [row(f"{k.upper()} (n = {len(v.masses)})" if v is not None else k.upper(), v)
+    notes = getattr(result, "rigid_design_notes", {})
+    lines += [row(f"{k.upper()} (n = {len(v.masses)})" if v is not None else k.upper(), v, notes.get(k))
               for k, v in result.rigid_designs.items()]
     pg = c.get("projected_gradient_norm")
     lines += ["", f"convergence: {c['method']}, {c['iterations']} iterations, starts: {c['starts_agree']}, "

@@ -343,6 +343,28 @@ def test_write_never_replaces_the_input_or_an_existing_file(tmp_path, capsys):
     code, _, err = _cli(["optimize", str(path), "--write", str(existing)], capsys)
     assert code == 2 and "--force" in err
     assert path.read_text() == before and existing.read_text() == "mine"
+    # through a symbolic link, either way round (the link as the input replaced the file it points to)
+    link = tmp_path / "link.toml"
+    link.symlink_to(path.name)
+    for stack_file, write in ((link, path), (path, link)):
+        code, _, err = _cli(["optimize", str(stack_file), "--write", str(write), "--force"], capsys)
+        assert code == 2 and "input stack file" in err, (stack_file, write)
+    assert path.read_text() == before
+
+
+def test_a_bound_of_zero_on_a_linear_slot_keeps_the_gradient_of_the_search_map():
+    """`_Space.to_x` against its closed form and derivative: log-scaled masses `lo (hi/lo)^u`, linear gaps
+    `lo + u (hi - lo)`, with a gap bound of 0 (a review: the unused log branch, `0 * inf^u`, made the
+    search's gradient NaN through `where`, and `optimize` stopped at its start, "converged")."""
+    from hertz_chain.optimization import _Space
+
+    lo, hi = np.array([0.05, 0.0]), np.array([0.9, 5e-3])
+    space = _Space(3, None, {}, (), lo, hi, np.array([True, False]), None)
+    u = jnp.array([0.3, 0.6])
+    np.testing.assert_allclose(space.to_x(u), [0.05 * 18**0.3, 0.6 * 5e-3], rtol=1e-14)
+    jac = np.asarray(jax.jacfwd(space.to_x)(u)).diagonal()
+    np.testing.assert_allclose(jac, [0.05 * math.log(18) * 18**0.3, 5e-3], rtol=1e-14)
+    np.testing.assert_allclose(np.asarray(jax.grad(lambda u: space.to_x(u).sum())(u)), jac, rtol=1e-14)
 
 
 def test_numbers_of_masses_are_compared_and_the_best_wins(tmp_path):
