@@ -538,7 +538,14 @@ def parse_test(raw, standard: str | None = None) -> TestSpec:
     if name is not None:
         if not isinstance(name, str):
             raise StackFileError(f"test.standard: {name!r} is invalid: a condition name, e.g. \"JESD22-B110 B\"")
-        return TestSpec.from_condition(find_condition(name), **over)
+        from .errors import ParameterError
+
+        try:
+            condition = find_condition(name)
+        except ParameterError as exc:  # the key it came from: the file's test.standard or --standard
+            key = "--standard" if standard is not None else "test.standard"
+            raise StackFileError(f"{key}: {name!r} is invalid: {exc.allowed}") from None
+        return TestSpec.from_condition(condition, **over)
     missing = [k for k in ("shape", "peak_g", "duration") if k not in over]
     if missing:
         raise StackFileError(f"test.{missing[0]}: missing; give test.standard (a condition of the table) or the "

@@ -170,6 +170,8 @@ def test_test_section_overrides_the_row():
     ({"standard": "JESD22-B110 B", "duration_tolerance": -30}, "test.duration_tolerance: -30 is invalid"),
     ({"standard": "JESD22-B110 B", "band": 1.5}, "test.band"),
     ({"standard": "JESD22-B110 B", "duration": "1 kg"}, "test.duration"),
+    # an unknown condition names its key (it read "standard = ... is invalid", without the file's key)
+    ({"standard": "MIL-STD-883 2002 Z"}, "test.standard: 'MIL-STD-883 2002 Z' is invalid: did you mean"),
 ])
 def test_bad_test_sections(raw, key):
     with pytest.raises(StackFileError) as err:
