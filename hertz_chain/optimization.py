@@ -1129,7 +1129,13 @@ def optimize(path: str | Path) -> OptimizeResult:
     if not report.status.ok or not math.isfinite(value):
         status = OptimizeStatus.FAILED
         why = f"the best design could not be simulated ({report.status.text})"
+    # the file's values outside their bounds: the search starts from the nearest bound (a review: silent)
+    file_values = np.asarray(space.dm.values(), dtype=float)
+    outside = [f"{sl.label} = {v:.6g} (the file's) lies outside its bounds [{lo:.6g}, {hi:.6g}] (SI units): "
+               "the search started from the nearest bound"
+               for sl, v, lo, hi in zip(space.slots, file_values, space.lo, space.hi) if not lo <= v <= hi]
     convergence = {
+        "start_outside_bounds": outside,
         "method": ("COBYQA" if problem.objective == "srs" else
                    "SLSQP" if problem.total_mass or problem.needs_pulse else "L-BFGS-B"),
         "gradient": (None if problem.objective == "srs" else

@@ -498,6 +498,7 @@ def optimize_table(result) -> str:
               "  (derivative-free)" if c.get("gradient") is None else
               f"  gradient: {c['gradient']} (no projected-gradient norm under limits or a mass budget)",
               "  active bounds: " + (", ".join(c["active_bounds"]) or "none")]
+    lines += [f"  note: {note}" for note in c.get("start_outside_bounds", ())]
     if c.get("limits"):
         lines.append("  limits: " + ", ".join(f"{k} {v['limit']:.6g}: {v['value']:.6g} ({v['state']})"
                                              for k, v in c["limits"].items()))

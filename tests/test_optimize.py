@@ -462,7 +462,9 @@ def test_srs_objective_fits_the_half_sine_srs_of_condition_b(tmp_path, capsys):
 
 
 def test_a_search_cut_short_exits_3_and_still_reports_its_best_point(tmp_path, capsys):
-    doc = {"drop": {"impact_velocity": "2 m/s"}, "stack": {"masses": ["1 kg", "100 g"], "gaps": 0},
+    """Two iterations only: exit 3, the best point reported and written; the file's speed, 6 m/s, outside
+    the bounds (the search starts from 5 m/s), is noted (a review: it was silent)."""
+    doc = {"drop": {"impact_velocity": "6 m/s"}, "stack": {"masses": ["1 kg", "100 g"], "gaps": 0},
            "contact": {"law": "tsuji", "stiffness": "1e8 N/m^1.5", "restitution": 0.8,
                        "ground": {"stiffness": "1e10 N/m^1.5"}},
            "optimize": {"objective": "pulse", "target_peak_g": 1500, "target_duration": "0.5 ms", "starts": 1,
@@ -475,6 +477,8 @@ def test_a_search_cut_short_exits_3_and_still_reports_its_best_point(tmp_path, c
     assert res["status"] == "not converged" and res["convergence"]["why"]
     assert err.count("\n") == 1 and err.startswith("hertz-chain: optimize not converged: ")
     assert out.exists() and res["masses"] == [1.0, 0.1]
+    (note,) = res["convergence"]["start_outside_bounds"]
+    assert note.startswith("drop.impact_velocity = 6 (the file's) lies outside its bounds [0.5, 5]")
 
 
 def test_refined_largest_sample_of_a_sine_is_its_peak():
