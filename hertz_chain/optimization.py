@@ -49,6 +49,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 import math
+import re
 import time
 from pathlib import Path
 from typing import Any
@@ -967,19 +968,48 @@ def _document(space: _Space, x: np.ndarray) -> dict:
     doc = copy.deepcopy(space.doc)
     f = {k: np.asarray(v) for k, v in space.dm.fields(x).items()}
     stack = doc.setdefault("stack", {})
+    varied = {(s.key, s.position) for s in space.slots}
+
+    def entries(key, raw):
+        # the user's own entries where they are not varied (units kept), the varied ones in the user's unit
+        values = [float(v) for v in f[key]]
+        if isinstance(raw, list) and len(raw) != len(values) or raw is None:
+            return values
+        raw = raw if isinstance(raw, list) else [raw] * len(values)
+        return [_in_users_unit(r, v, KEYS[key].dimension) if (key, i) in varied else r
+                for i, (r, v) in enumerate(zip(raw, values))]
+
+    same_n = "design" not in stack and space.n == len(space.dm.base["stack.masses"])
+    stack["masses"] = entries("stack.masses", stack.get("masses") if same_n else None)
     stack.pop("design", None)
-    stack["masses"] = [float(m) for m in f["stack.masses"]]
-    if any(s.key == "stack.gaps" for s in space.slots) or space.n != len(space.dm.base["stack.masses"]):
-        stack["gaps"] = [float(g) for g in f["stack.gaps"]]
+    if any(s.key == "stack.gaps" for s in space.slots) or not same_n:
+        stack["gaps"] = entries("stack.gaps", stack.get("gaps") if same_n else None)
     for s, v in zip(space.slots, x):
         if s.key in ("contact.stiffness", "contact.restitution"):
             _set_interface(doc, s.index, s.key.split(".")[1], float(v))
         elif s.key.startswith("drop."):
             drop = doc.setdefault("drop", {})
+            name = s.key.split(".")[1]
+            raw = drop.get(name)
             drop.pop("height", None)
             drop.pop("impact_velocity", None)
-            drop[s.key.split(".")[1]] = float(v)
+            drop[name] = _in_users_unit(raw, float(v), KEYS[s.key].dimension)
     return doc
+
+
+def _in_users_unit(raw, value: float, dimension: str):
+    """`value` (SI) in the unit of the user's entry `raw` (`"400 g"` -> `"316.228 g"`), or the plain SI
+    number where `raw` was one or has no unit that converts."""
+    from .units import parse_quantity
+
+    match = re.fullmatch(r"\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*(\S.*?)\s*", raw) if isinstance(raw, str) else None
+    if match is None:
+        return value
+    try:
+        factor = parse_quantity(f"1 {match.group(1)}", dimension)
+    except Exception:  # a unit this dimension does not take: SI
+        return value
+    return f"{value / factor:.15g} {match.group(1)}"
 
 
 def _projected_gradient(ev: _Evaluator, u: np.ndarray) -> float:

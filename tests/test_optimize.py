@@ -72,7 +72,13 @@ def test_design_map_reproduces_build_of_the_written_file(law):
         np.testing.assert_allclose(got, want, rtol=1e-13, atol=0)
     x = dm.values() * np.array([0.7, 2.0, 1.5, 0.5, 1.3] + ([0.9] if not LAWS[law].elastic else []))
     space = types.SimpleNamespace(doc=doc, slots=dm.slots, n=3, dm=dm)  # what `_document` reads
-    written = parse_stack(tomli_w.dumps(_document(space, x)))
+    document = _document(space, x)
+    # the user's units kept (a review: every entry of a list with a varied one was written as a bare SI
+    # number): the unvaried gap as written, the varied one and the speed in the user's unit
+    assert document["stack"]["gaps"] == [f"{x[1] * 1e3:.15g} mm", "1 mm"]
+    assert document["drop"]["impact_velocity"] == f"{x[-2 if not LAWS[law].elastic else -1]:.15g} m/s"
+    assert document["stack"]["masses"][0] == 1.0 and document["stack"]["masses"][2] == 0.1
+    written = parse_stack(tomli_w.dumps(document))
     ref = build(written)
     for got, want in zip(leaves(dm(x)), leaves((ref.stack, ref.state))):
         np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-15)
