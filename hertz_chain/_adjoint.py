@@ -17,7 +17,7 @@ from ._scaling import FieldArgs
 from ._solve import _diffeqsolve, _scaled_field, _solve_record
 from ._solver import UnrolledERK, _SolveConfig
 from ._tracking import DELTA_OUT, T_IN, T_OUT
-from .errors import GradientAccuracyWarning
+from .errors import GradientAccuracyWarning, ParameterError
 
 # ==================================================================== reverse mode: replay the accepted steps
 # Onsets and releases in the replay (`_Replay`; docs/solver-defaults.md, "Onsets and releases in the replay"). Where a contact closes inside a step,
@@ -302,8 +302,17 @@ def _history(diff, t1s, scale, T, cfg: _SolveConfig):
 
 def _replay_of(stack, scale, T, cfg: _SolveConfig):
     """`(dyn, replay)`: the differentiable part of `stack` and its `_Replay`. Warns
-    (`GradientAccuracyWarning`, when the derivative is traced) for a law with a `gradient_note`."""
+    (`GradientAccuracyWarning`, when the derivative is traced) for a law with a `gradient_note`; raises
+    `ParameterError` for a law with `gradient_refused` (Jackson–Green) and for an implicit solver."""
+    if not isinstance(cfg.solver, (UnrolledERK, dfx.AbstractERK)):
+        # an implicit step replayed inside a derivative: its Newton iteration differentiated as it runs
+        raise ParameterError("solver", type(cfg.solver).__name__, "an explicit solver (tsit5, dopri5, dopri8 or "
+                             "their -diffrax forms) for derivatives: through kvaerno5 a review measured 13-19 % "
+                             "off central differences (viscoelastic, 1 mm gaps, gravity) and its forward mode fails")
     for law in {type(law): law for law in stack.laws}.values():
+        if law.gradient_refused:
+            raise ParameterError("contact law", law.name, f"derivatives through it are refused: {law.gradient_note}; "
+                                 "take central differences of solves instead")
         if law.gradient_note:
             warnings.warn(f"derivatives through the {law.name} contact law: {law.gradient_note}; check them "
                           "against differences", GradientAccuracyWarning, stacklevel=2)

@@ -41,6 +41,8 @@ class AbstractContactLaw(eqx.Module):
     #: where the replayed derivatives (`hertz_chain._adjoint`) are known to be less accurate than the solve
     #: through this law, and why (warned, `GradientAccuracyWarning`, when such a derivative is traced); None
     gradient_note: ClassVar[str | None] = None
+    #: derivatives through this law are refused (`ParameterError` when traced; the note says why)
+    gradient_refused: ClassVar[bool] = False
 
     @abc.abstractmethod
     def elastic_force(self, delta: ArrayLike) -> Array:

@@ -66,9 +66,9 @@ class SolverError(HertzChainError, RuntimeError):
 
 class GradientAccuracyWarning(UserWarning):
     """A derivative is computed where it is known to be less accurate than the solve: through a contact
-    law with a `gradient_note` (Jackson–Green: its loading curve jumps at the start of its published fit,
-    which the replayed derivatives do not treat; measured up to 1.3e-3 relative off central differences).
-    Warned when such a derivative is traced (once per compilation)."""
+    law with a `gradient_note` that does not refuse derivatives (`gradient_refused`: Jackson–Green's, whose
+    loading curve jumps at the start of its published fit, are refused). Warned when such a derivative is
+    traced (once per compilation)."""
 
 
 def check_parameter(ok: bool, name: str, value: object, allowed: str) -> None:
