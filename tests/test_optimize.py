@@ -28,6 +28,7 @@ from hertz_chain.keys import resolve
 from hertz_chain.optimization import _document, optimize, prepare
 from hertz_chain.registry import LAWS
 from hertz_chain.report import optimize_table
+from hertz_chain.units import parse_quantity
 from hertz_chain.stackfile import parse_stack
 
 G0 = 9.80665
@@ -544,7 +545,9 @@ def test_a_peak_force_limit_stops_the_drop_speed_where_johnson_says(tmp_path):
                         "vary": [{"key": "drop.impact_velocity", "bounds": ["0.5 m/s", "3 m/s"]}]}}
     result = optimize(_write(tmp_path, doc))
     assert result.status.ok and result.convergence["method"] == "SLSQP"
-    speed = float(tomllib.loads(result.document())["drop"]["impact_velocity"])
+    written = tomllib.loads(result.document())["drop"]["impact_velocity"]
+    assert written.endswith(" m/s")  # the file's unit (it wrote "1 m/s")
+    speed = parse_quantity(written, "velocity")
     assert speed == pytest.approx(v_star, rel=1e-3)
     # the search converged, but the target is out of reach, and the result says so: the peak at the force
     # limit is F / (m g0) = 3059 g, 69.4 % under the 10,000 g target (closed form)
