@@ -219,6 +219,10 @@ def _chi_exact_cached(e: float) -> float:
         return (_z_minus_log1p(x) - _z_minus_log1p(-e * x)) / (x * x)
 
     hi = (1.0 / e) * (1.0 - 1e-16)
+    if g(hi) > 0.0:
+        # e below ~0.0254: the root lies within rounding of 1/e, x = (1 - s)/e with h(-e x) = s - 1 - ln s =
+        # h(x), so s ~ exp(-1 - h(1/e)) < 1e-16 (a review: brentq's bracket failed, a raw ValueError)
+        return (1.0 / e) * (1.0 - math.exp(-1.0 - _z_minus_log1p(1.0 / e)))
     lo = 1e-3 * (1.0 - e)
     while g(lo) <= 0.0:  # pragma: no cover - not reached for e < 1
         lo *= 0.1

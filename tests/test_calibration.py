@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from scipy.integrate import cumulative_simpson, solve_ivp
 
+import hertz_chain as hc
 from hertz_chain import calibration as cal
 from hertz_chain.contact import make_law
 from hertz_chain.errors import ParameterError
@@ -105,6 +106,18 @@ def test_exact_map_identity_and_lambertw_inverse():
         assert cal.restitution_from_chi(x) == pytest.approx(e, abs=1e-12)
     # small-chi series 1 - 2chi/3 + 4chi^2/9 (derived from the same relation) joins the W0 branch
     assert cal.restitution_from_chi(0.99e-4) == pytest.approx(cal.restitution_from_chi(1.01e-4), abs=2e-6)
+
+
+@pytest.mark.parametrize("law", ["hunt-crossley", "power"])
+def test_exact_map_below_e_0025_by_integration(law):
+    """Below e ~ 0.0254 the exact chi lies within rounding of 1/e (x = (1 - s)/e, s ~ exp(-1 - h(1/e)) <
+    1e-16): the calibration returned scipy's bracket ValueError (a review; a stack file with e = 0.02 was a
+    traceback, exit 1). The law calibrated there gives its e in a simulated impact (an independent
+    integration of the force law) to 1e-9, down to the smallest e allowed (0.001)."""
+    extra = {"exponent": 2.0} if law == "power" else {}
+    for e in (0.001, 0.02, 0.0254):
+        made = hc.make_law(law, stiffness=1e9, restitution=e, calibration_velocity=1.0, **extra)
+        assert float(hc.simulate_impact(made, 1.0, 0.025).e) == pytest.approx(e, rel=1e-9)
 
 
 # docs/references.md [num]: e produced by each published map for targets 0.5 and 0.9 (3 decimals)
