@@ -167,6 +167,11 @@ class Thornton(_ElasticPlastic):
 
 
 
+#: the smallest yield strain S_y/E' `JacksonGreen` takes (the material table's metals: 1.1e-3, copper C110, to 1.8e-2,
+#: steel 52100)
+MIN_YIELD_STRAIN = 1e-4
+
+
 class JacksonGreen(_ElasticPlastic):
     """Elastic–plastic sphere contact of Jackson & Green (2005), "A finite element study of elasto-plastic
     hemispherical contact against a rigid flat", J. Tribol. 127, 343 (loading), with elastic Hertz
@@ -237,6 +242,12 @@ class JacksonGreen(_ElasticPlastic):
             raise ParameterError("yield_strength", s_y, f"well below E' = {e_star:.4g} Pa: at the yield strain "
                                  f"S_y/E' = {strain:.3g} Jackson & Green's fit starts below Hertz (at 1.9 w_c), "
                                  "outside the metals' range it was fitted on; use thornton, or a smaller yield_strength")
+        if strain < MIN_YIELD_STRAIN:
+            # a review: 1e5 Pa on E' = 2.4e10 (4e-6) put the critical overlap at 1e-13 m, the solve's scales
+            # at 1e82 s, and reported "no contact" with NaN; 4e-5 ran with an overlap twice the radius
+            raise ParameterError("yield_strength", s_y, f"a yield strain S_y/E' = {strain:.3g} of at least "
+                                 f"{MIN_YIELD_STRAIN:g} (E' = {e_star:.4g} Pa): Jackson & Green's fit is of metals "
+                                 "(the table's: S_y/E' 1e-3 to 2e-2); a softer solid goes far outside it, and past its radius")
         return cls(k, R, s_y, nu, law._find_switch(), clamp)
 
     # ---------------------------------------------------------------- the published fit

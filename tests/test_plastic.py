@@ -353,6 +353,12 @@ def test_jackson_green_refuses_a_yield_strain_outside_its_fit_and_materials_with
         hc.make_law("jackson-green", stiffness=k, yield_strength=5e9, effective_radius=r)
     with pytest.raises(ParameterError, match=r"yield_strength"):
         hc.make_law("jackson-green", stiffness=k, yield_strength=500e9, effective_radius=r)
+    # far below the metals' yield strains (a review: 1e5 Pa reported "no contact" and NaN, 1e6 Pa an overlap
+    # twice the radius): one line; the softest metal of the table, copper C110 (1.1e-3), is taken
+    with pytest.raises(ParameterError, match=r"yield_strength = 1000000.0 is invalid: a yield strain "
+                                             r"S_y/E' = 9.43e-06 of at least 0.0001"):
+        hc.make_law("jackson-green", stiffness=k, yield_strength=1e6, effective_radius=r)
+    hc.make_law("jackson-green", stiffness=k, yield_strength=1.1e-3 * 0.75 * k / math.sqrt(r), effective_radius=r)
     doc = {"drop": {"impact_velocity": "1 m/s"}, "stack": {"masses": ["4 g"], "material": "pmma", "radius": "5 mm"},
            "contact": {"law": "jackson-green"}}
     p = tmp_path / "pmma.toml"
