@@ -66,13 +66,15 @@ def _scales(stack: Stack, state: State) -> Scales:
 def _default_t_max(stack: Stack, state: State, sc: Scales) -> Array:
     """A time limit (s) that covers the first cascade, from the physics (issue 16):
 
-    `t_fall + 2 sum_j t_gap,j + 200 sum_j t_c,j + 4 V/g`, where `t_fall` is when mass 1 reaches the
+    `t_fall + 4 sum_j t_gap,j + 200 sum_j t_c,j + 4 V/g`, where `t_fall` is when mass 1 reaches the
     ground in free flight (0 without the ground or when it never does), `t_gap,j = min(s_j/V,
     sqrt(2 s_j/g))` the time to close gap `s_j` at the drop speed `V` or by falling from rest,
     `t_c,j = 2.94328 delta_max,j / V` the Hertz contact time estimate of interface `j` (its own
     effective mass; Johnson 1985, §11.1), and `4 V/g` two times of flight of a mass thrown up at `V`
     (mass 1's bounces on the ground during the cascade). The solve stops at the cascade's end, so a
-    generous limit costs nothing when the cascade ends."""
+    generous limit costs nothing when the cascade ends. The gaps count four times: after the first
+    collisions gaps close slower than `V` (a review: three masses halving, 1 cm gaps, no gravity, stiff
+    contacts: the last collision at 0.0425 s, the limit with twice the gaps 0.0414 s)."""
     stack, state = jax.lax.stop_gradient((stack, state))
     g, V = stack.gravity, sc.velocity
     x, v = state.positions, state.velocities
@@ -85,7 +87,7 @@ def _default_t_max(stack: Stack, state: State, sc: Scales) -> Array:
     t_gap = jnp.minimum(gaps / V, jnp.where(g > 0, jnp.sqrt(2.0 * gaps / g_safe), jnp.inf))
     t_c = jnp.where(stack.interface_mask(), HERTZ_TIME * _peak_overlaps(stack, V) / V, 0.0)
     flight = jnp.where(g > 0, 4.0 * V / g_safe, 0.0)
-    return t_fall + 2.0 * jnp.sum(t_gap) + 200.0 * jnp.sum(t_c) + flight
+    return t_fall + 4.0 * jnp.sum(t_gap) + 200.0 * jnp.sum(t_c) + flight
 
 
 def inverse_force_scale(stack: Stack, scale: Array) -> Array:

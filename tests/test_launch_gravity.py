@@ -413,6 +413,20 @@ def test_closure_times_are_the_first_positive_root():
             assert tj == np.inf
 
 
+def test_the_default_time_limit_covers_slow_late_collisions_of_a_stiff_gapped_stack():
+    """Three masses halving, 1 cm gaps, g = 0, stiff Hertz contacts (1e15 N/m^1.5, contacts of ~1e-5 of the
+    flight times): mass 1, bounced off the ground, catches mass 2 again late, at 0.0425 s by the rigid
+    event-driven model, past the default limit the gaps counted twice gave (0.0414 s: "t_max reached", a
+    review). With the default limit the launch velocities are the rigid model's (elastic, e = 1) to 1e-6."""
+    m = np.array([1.0, 0.5, 0.25])
+    stack = hc.Stack(m, hc.make_law("hertz", stiffness=1e15), gravity=0.0)
+    state = hc.at_impact(stack, 1.0, 0.01)
+    rigid = hc.simulate_rigid(m, np.asarray(state.velocities), np.asarray(state.positions) - np.r_[0.0,
+                              np.asarray(state.positions)[:-1]], 1.0, 1.0)
+    assert rigid.final_time > 0.0414
+    np.testing.assert_allclose(hc.launch_velocity(stack, state), rigid.launch_velocities, rtol=1e-6)
+
+
 def test_issue_16_example_gain_and_until_t_max():
     # Issue 16: masses [1, 0.4, 0.16] kg, 5 cm gaps, 1 m/s, Tsuji 1e9 N/m^1.5, e = 0.8, standard gravity.
     # Before the fix hertz_chain reported a gain of 0.1718 (the top mass's velocity after its last
