@@ -177,14 +177,15 @@ class _Replay(eqx.Module):
             jr = jnp.where(kind == 4, jnp.argmax(turn, axis=1), jr)
         return kind, j, jr, star, F
 
-    def _branches(self, t0, t1, kind, j, jr, f0, f1, rolled: str) -> list:
+    def _branches(self, t0, t1, kind, j, jr, f0, f1, rolled: str | None) -> list:
         """The replays `(dyn, y, t*) -> (y', t*')` of the step `t0 -> t1`, one per kind this replay has
         (class docstring: the window, onset and release with `split`, the turn with `memory`, a release and
         a turn in one branch; `_index` maps a kind to its position): `kind`, `j`, `jr`, `f0`, `f1` from
         `classify`; `rolled`: the `scan_kind` of the onsets' and the kinks' steps (`_rolled`), the
-        rarest kinds: written out, the rare kinds made most of the compiled derivative (Thornton's
-        gradient compiled in ~31 s, ~16 s rolled; the windows' steps, several per onset, stay written
-        out: rolled they cost ~10 % of a Tsuji gradient's run time)."""
+        rarest kinds, for the laws with memory (`vjp`, `jvp`): written out, with a memory law's field,
+        they made most of the compiled derivative (Thornton's gradient compiled in ~31 s, ~16 s rolled);
+        for the other laws they stay written out (rolled, a Tsuji gradient ran 13-17 % slower in
+        `benchmarks/run.py`), as do the windows' steps."""
 
         def plain(d, y, ts):
             return self._solver_step(dfx.ODETerm(_scaled_field), y, t0, t1, self._args(d)), ts
@@ -232,7 +233,7 @@ class _Replay(eqx.Module):
         of `(dyn, y0, t*)`. The kind of step (class docstring) comes from `classify`, outside the
         differentiation, so a plain step costs what it did before onsets were treated; `f0`, `f1`: the
         unclamped forces and the overlap rates at the step's ends (`(2, n)`, from `classify`)."""
-        fns = self._branches(t0, t1, kind, j, jr, f0, f1, "checkpointed")
+        fns = self._branches(t0, t1, kind, j, jr, f0, f1, "checkpointed" if self.memory else None)
         if len(fns) == 1:
             return jax.vjp(fns[0], dyn, y0, t_star)[1](cotangents)
         return jax.lax.switch(self._index(kind), [lambda fn=fn: jax.vjp(fn, dyn, y0, t_star)[1](cotangents)
@@ -241,7 +242,7 @@ class _Replay(eqx.Module):
     def jvp(self, tangents, dyn, y0, t_star, t0, t1, kind, j, jr, f0, f1):
         """The step's Jacobian-vector product: `tangents = (dyn_dot, y_dot, t*_dot)` of `(dyn, y0, t*)` to
         those of `(y', t*')` (the forward counterpart of `vjp`: the same replays)."""
-        fns = self._branches(t0, t1, kind, j, jr, f0, f1, "lax")
+        fns = self._branches(t0, t1, kind, j, jr, f0, f1, "lax" if self.memory else None)
         if len(fns) == 1:
             return jax.jvp(fns[0], (dyn, y0, t_star), tangents)[1]
         return jax.lax.switch(self._index(kind), [lambda fn=fn: jax.jvp(fn, (dyn, y0, t_star), tangents)[1]

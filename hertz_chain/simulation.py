@@ -573,7 +573,10 @@ def _checked(v, status, replay=False):
     (through a diffrax adjoint) are NaN wherever the result depends on the parameter."""
     if not isinstance(status, jax.core.Tracer):
         if np.asarray(status).max() > _LAST_ENDED:  # 2 us; np.any(... > Status.X) took 10 us per call
-            raise SolverError(_NOT_ENDED)
+            # the cause, by the worst status (a review: the generic words suggested max_steps for a t_max)
+            worst = Status(int(np.asarray(status).max()))
+            raise SolverError(f"hertz_chain.launch_velocity: the cascade did not end ({worst.text}): "
+                              + worst.hint().replace("solver.", ""))
         return v
     bad = status > _LAST_ENDED
     return _guard_reverse(v, bad) if replay == "reverse" else _guard_forward(v, bad)

@@ -451,3 +451,15 @@ def test_simulate_under_a_trace_says_what_to_use():
     with pytest.raises(ParameterError, match="simulate_batch runs on the host"):
         jax.jit(lambda m: simulate_batch(jax.vmap(lambda mm: Stack(mm, law))(m), jax.vmap(lambda _: state)(m)).status_code)(
             jnp.ones((2, 2)))
+
+
+def test_a_launch_that_did_not_end_names_its_cause():
+    """Two masses, 1 cm gap, g = 0, drop speed 1 m/s: the gap alone takes 10 ms to close, so t_max = 1 ms
+    ends the run at t_max and 16 steps cannot reach the cascade's end; the error says which (a review: one
+    message for every cause suggested raising max_steps for a t_max)."""
+    stack = hc.Stack(np.array([1.0, 0.5]), hc.Hertz(1e9), gravity=0.0)
+    state = hc.at_impact(stack, 1.0, 0.01)
+    with pytest.raises(hc.SolverError, match=r"the cascade did not end \(incomplete: t_max reached\): .*raise t_max"):
+        hc.launch_velocity(stack, state, t_max=1e-3)
+    with pytest.raises(hc.SolverError, match=r"\(incomplete: max_steps reached\): .*raise max_steps"):
+        hc.launch_velocity(stack, state, max_steps=16)
