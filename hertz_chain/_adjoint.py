@@ -18,6 +18,7 @@ from ._solve import _diffeqsolve, _scaled_field, _solve_record
 from ._solver import UnrolledERK, _SolveConfig
 from ._tracking import DELTA_OUT, T_IN, T_OUT
 from .errors import GradientAccuracyWarning, ParameterError
+from .registry import SOLVERS
 
 # ==================================================================== reverse mode: replay the accepted steps
 # Onsets and releases in the replay (`_Replay`; docs/solver-defaults.md, "Onsets and releases in the replay"). Where a contact closes inside a step,
@@ -307,7 +308,9 @@ def _replay_of(stack, scale, T, cfg: _SolveConfig):
     `ParameterError` for a law with `gradient_refused` (Jackson–Green) and for an implicit solver."""
     if not isinstance(cfg.solver, (UnrolledERK, dfx.AbstractERK)):
         # an implicit step replayed inside a derivative: its Newton iteration differentiated as it runs
-        raise ParameterError("solver", type(cfg.solver).__name__, "an explicit solver (tsit5, dopri5, dopri8 or "
+        name = type(cfg.solver).__name__  # its name in `registry.SOLVERS` where it has one ('kvaerno5')
+        name = name.lower() if name.lower() in SOLVERS else name
+        raise ParameterError("solver", name, "an explicit solver (tsit5, dopri5, dopri8 or "
                              "their -diffrax forms) for derivatives: through kvaerno5 a review measured 13-19 % "
                              "off central differences (viscoelastic, 1 mm gaps, gravity) and its forward mode fails")
     for law in {type(law): law for law in stack.laws}.values():

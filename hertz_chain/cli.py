@@ -392,7 +392,7 @@ def sweep(
         if resume and not output.exists():
             _fail(f"--resume: {output} does not exist yet; run without --resume to start the sweep")
     except HertzChainError as exc:
-        _fail(str(exc))
+        _fail(_as_option(exc))
     from .sweeps import _EXTRA_DIM, VARIABLES
 
     # every variable a float64 per design (n per mass or interface), the sampled values, and the markers
@@ -437,7 +437,7 @@ def sweep(
         result = run_sweep(stack_file, output, workers=workers, scheduler=scheduler, progress=sys.stderr.isatty(),
                            on_chunk=estimate)
     except HertzChainError as exc:
-        _fail(str(exc))
+        _fail(_as_option(exc))
     summary = result.to_dict()
     if as_json:
         from .report import to_json
@@ -449,6 +449,16 @@ def sweep(
         chunks = f"{result.computed} chunk{'' if result.computed == 1 else 's'}"
         typer.echo(f"{result.path}: {plural(result.designs, 'design')}; {chunks} computed, {result.skipped} "
                    f"already done{rate}; status: {counts}")
+
+
+def _as_option(exc: HertzChainError) -> str:
+    """The message of `exc`, an `OutputPathError` about the Python argument `output` (`sweeps.sweep`)
+    named as the command line's option `--output`."""
+    from .errors import OutputPathError
+
+    if isinstance(exc, OutputPathError) and exc.key == "output":
+        return str(OutputPathError("--output", exc.path, exc.problem))
+    return str(exc)
 
 
 EXIT_CHECK_FAILED = 1  # `check`: a judged criterion failed

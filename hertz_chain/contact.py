@@ -595,6 +595,12 @@ def make_law(
     if row.damping is not None and e is None and not own_given:
         raise ParameterError("restitution", None, f"the {law!r} law needs restitution or {' / '.join(own)}")
     param = _nonnegative(own_given[0][1], own_given[0][0]) if own_given else None
+    if param is not None and row.damping_max is not None and param > row.damping_max:
+        # the stack files' cap (`registry.LawRow.damping_max`), so that Python and a file agree (a review:
+        # Kelvin-Voigt c = 1e10 N s/m gave e = -8e-7 from a simulated impact without a word)
+        label = row.damping_label or own_given[0][0]
+        raise ParameterError(own_given[0][0], own_given[0][1],
+                             f"at most {row.damping_max:g} ({label}) for the {law!r} law")
     kwargs = {key: extra[key] for key in wanted}
     return _LAW_CLASSES[law].from_config(k, restitution=e, damping=param, effective_mass=effective_mass,
                                          calibration_velocity=calibration_velocity, chi_map=chi_map,

@@ -271,6 +271,19 @@ def _check_curved(contacts: ContactsSpec, bodies: StackSectionSpec, ground, over
             )
 
 
+def _toml_error(exc: Exception, text: str) -> str:
+    """tomllib's message with the line it points at quoted (its "Cannot overwrite a value (at line 5,
+    column 10)" names no key: a review found a duplicated key hard to find)."""
+    msg = str(exc)
+    found = re.search(r"at line (\d+), column \d+", msg)
+    lines = text.splitlines()
+    if found and 1 <= int(found.group(1)) <= len(lines):
+        line = lines[int(found.group(1)) - 1].strip()
+        if line:
+            msg += f": {_show(line[:80] + ('...' if len(line) > 80 else ''))}"
+    return msg
+
+
 def parse_stack(data: Mapping | str, *, source: str | None = None) -> StackSpec:
     """Validate a stack description — TOML text or an already-parsed `dict` (whose values may also
     be pint Quantities) — into a `StackSpec`. `source` (a file name) prefixes error messages.
@@ -285,7 +298,7 @@ def parse_stack(data: Mapping | str, *, source: str | None = None) -> StackSpec:
         try:
             data = tomllib.loads(data)
         except tomllib.TOMLDecodeError as exc:
-            err = _error(None, f"{prefix}invalid TOML: {exc}")
+            err = _error(None, f"{prefix}invalid TOML: {_toml_error(exc, data)}")
             raise err from None
         except RecursionError:
             raise _error(None, f"{prefix}invalid TOML: arrays or tables nested too deeply") from None
@@ -379,9 +392,10 @@ def load_stack_file(path: str | Path, overrides=None) -> StackSpec:
     if overrides:
         import tomllib
 
+        text = text.removeprefix("\ufeff")
         try:
-            data = tomllib.loads(text.removeprefix("\ufeff"))
+            data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
-            raise _error(None, f"{path}: invalid TOML: {exc}") from None
+            raise _error(None, f"{path}: invalid TOML: {_toml_error(exc, text)}") from None
         return parse_stack(apply_overrides(data, overrides), source=f"{path} (with --set)")
     return parse_stack(text, source=str(path))

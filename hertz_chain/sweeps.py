@@ -696,7 +696,7 @@ def check(path: str | Path, output: str | Path) -> tuple[_Plan, str]:
         raise StackFileError(f"{path}: {exc}") from None
     out = Path(output)
     if out.suffix != ".zarr":
-        raise OutputPathError("--output", out, "a sweep store is a folder ending in .zarr")
+        raise OutputPathError("output", out, "a sweep store is a folder ending in .zarr")
     try:
         exists = out.exists()
     except OSError:  # a name too long for the file system: `check_output_path` says so
@@ -707,7 +707,7 @@ def check(path: str | Path, output: str | Path) -> tuple[_Plan, str]:
     else:  # the folder exists and is writable, the name fits (the store is made beside it, then renamed)
         from ._paths import check_output_path
 
-        check_output_path(out, "--output", (".zarr",), force=False)
+        check_output_path(out, "output", (".zarr",), force=False)
     return plan, text
 
 
@@ -744,9 +744,9 @@ def _check_store(out: Path, text: str) -> None:
         except Exception:  # noqa: BLE001  (any unreadable layout: not a store of ours)
             attrs = {}
     if attrs.get("title") != "hertz_chain sweep" or not all((out / v).is_dir() for v in ("status", "regime")):
-        raise OutputPathError("--output", out, "exists and is not a hertz_chain sweep store; choose a new name")
+        raise OutputPathError("output", out, "exists and is not a hertz_chain sweep store; choose a new name")
     if attrs.get("stack_file_sha256") not in (_fingerprint(text), hashlib.sha256(text.encode()).hexdigest()):
-        raise OutputPathError("--output", out, "written by a different stack file or sweep spec; resume it "
+        raise OutputPathError("output", out, "written by a different stack file or sweep spec; resume it "
                               "with the same file, or choose a new name")
 
 
@@ -892,7 +892,7 @@ def _make_store(output: Path, plan: _Plan, text: str, source: str) -> None:
     except OSError as exc:
         from .errors import OutputPathError
 
-        raise OutputPathError("--output", output, f"cannot create the store ({exc.strerror or exc})") from None
+        raise OutputPathError("output", output, f"cannot create the store ({exc.strerror or exc})") from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 

@@ -272,7 +272,7 @@ RAW_ROWS = [
     ("nul_bytes", b"[drop]\x00\x00\nimpact_velocity = 1\n", "invalid TOML"),
     ("empty_file", b"", "contact"),
     ("deep_nesting", b"a = " + b"[" * 100_000 + b"]" * 100_000 + b"\n", "nested too deeply"),
-    ("duplicate_key", b"[drop]\ngravity = 0\ngravity = 1\n", "invalid TOML"),
+    ("duplicate_key", b"[drop]\ngravity = 0\ngravity = 1\n", "invalid TOML: Cannot overwrite a value (at line 3, column 12): 'gravity = 1'"),
     ("array_of_drop", b"[[drop]]\ngravity = 0\n", "drop"),
 ]
 
@@ -551,7 +551,7 @@ API_ROWS = [
         __import__("hertz_chain").Stack(m, __import__("hertz_chain").Hertz(1e9)),
         __import__("hertz_chain").at_impact(__import__("hertz_chain").Stack(m, __import__("hertz_chain").Hertz(1e9)),
                                             1.0, 1e-3), solver="kvaerno5")[-1])(__import__("jax.numpy").numpy.asarray(
-        [1.0, 0.5])), ParameterError, "solver = 'Kvaerno5' is invalid: an explicit solver (tsit5, dopri5, dopri8"),
+        [1.0, 0.5])), ParameterError, "solver = 'kvaerno5' is invalid: an explicit solver (tsit5, dopri5, dopri8"),
     # plain numbers of the Python API: a string, None or an array is one line (were float()'s TypeError or
     # ValueError, or a string such as "1" accepted)
     ("simulate_impact_none", lambda: __import__("hertz_chain").simulate_impact(__import__("hertz_chain").Hertz(1e9),
@@ -565,6 +565,15 @@ API_ROWS = [
      ParameterError, "impact_velocity"),
     ("make_law_string_stiffness", lambda: __import__("hertz_chain").make_law("hertz", stiffness="1e9"),
      ParameterError, "stiffness = '1e9' is invalid: a number (SI units"),
+    # the stack files' caps on a law's own damping (`registry.LawRow.damping_max`) hold from Python too
+    ("make_law_kv_damping_cap", lambda: __import__("hertz_chain").make_law("kelvin-voigt", stiffness=1e9, damping=1e10,
+                                                                           effective_mass=1.0),
+     ParameterError, "damping = 10000000000.0 is invalid: at most 1e+09 (c, N s/m) for the 'kelvin-voigt' law"),
+    ("make_law_hc_alpha_cap", lambda: __import__("hertz_chain").make_law("hunt-crossley", stiffness=1e9, alpha=1e7),
+     ParameterError, "alpha = 10000000.0 is invalid: at most 1e+06"),
+    ("make_law_viscoelastic_cap", lambda: __import__("hertz_chain").make_law("viscoelastic", stiffness=1e9, A=2.0,
+                                                                             effective_mass=1.0),
+     ParameterError, "A = 2.0 is invalid: at most 1 (A, s)"),
     ("check_output_missing", lambda: _paths.check_output_path("/nonexistent/r.nc", "--output", (".nc",), False),
      OutputPathError, "--output"),
     ("check_output_suffix", lambda: _paths.check_output_path("r.txt", "--output", (".nc",), False),

@@ -18,6 +18,7 @@ from scipy.stats import qmc
 
 import hertz_chain as hc
 from hertz_chain.cli import main
+from hertz_chain.errors import OutputPathError
 from hertz_chain.sweeps import check, sweep
 
 BASE = {"drop": {"impact_velocity": "1 m/s"}, "stack": {"masses": [1.0, 0.3, 0.1], "gaps": "1 mm"},
@@ -213,7 +214,10 @@ def test_a_store_of_another_sweep_or_a_foreign_folder_is_refused(tmp_path, capsy
     for target, word in ((out, "different stack file"), (foreign, "not a hertz_chain sweep store")):
         with pytest.raises(SystemExit) as exc:
             main(["sweep", str(other), "--output", str(target)])
-        assert exc.value.code == 2 and word in capsys.readouterr().err
+        err = capsys.readouterr().err
+        assert exc.value.code == 2 and word in err and f"--output {target}:" in err
+        with pytest.raises(OutputPathError, match=f"^output {target}: .*{word}"):  # Python's own argument
+            sweep(other, target)
     assert (foreign / "notes.txt").read_text() == "mine"
     # the store draws: a map over both axes, and a one-line refusal of an unknown axis or variable
     png = tmp_path / "map.png"
