@@ -74,11 +74,13 @@ out of them so that the derivative sees how they move: docs/solver-defaults.md, 
 the replay"; the two modes give the same discrete derivative. The derivative is as accurate as the
 solve's tolerance, no better: within 2e-6 of central differences in the masses, stiffnesses and
 restitutions for every law of the registry's five (Hertz, Hunt–Crossley, Tsuji, Kelvin–Voigt,
-viscoelastic) with gaps or touching, at the default 1e-11. In the gaps less: 1.8e-4 relative measured
-(three Hertz masses, 2 mm gaps, gravity; without gravity 4e-3 absolute where the exact derivative is 0),
-converging as the tolerance is tightened (1.4e-6 at 1e-13). Through Thornton's elastic–plastic law within
-2e-5 (the replay also splits each step where a contact turns from loading to unloading); through
-Jackson–Green up to 1.3e-3 (its loading curve jumps where its fit starts), with a `GradientAccuracyWarning`.
+viscoelastic) with gaps or touching, at the default 1e-11; in the drop speed 3.6e-6 (reviews). In the
+gaps less: 1.8e-4 relative measured (three Hertz masses, 2 mm gaps, gravity; without gravity 4e-3
+absolute where the exact derivative is 0; viscoelastic 5-7e-5), converging as the tolerance is
+tightened (1.4e-6 at 1e-13). Through Thornton's elastic–plastic law within 2e-5 (the replay also splits
+each step where a contact turns from loading to unloading). Derivatives through Jackson–Green (its
+loading curve jumps where its fit starts: a factor 5,000 off with gaps under gravity) and through an
+implicit solver (kvaerno5: 13-19 % off) are refused with `ParameterError`.
 
 The reasoning behind these defaults, with the measurements that decided them, is the developer page
 `docs/solver-defaults.md`.
