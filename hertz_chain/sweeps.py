@@ -23,7 +23,7 @@ Variables (per design): `status` (`hertz_chain.status.Status` codes), `top_veloc
 `velocity_gains` (per mass), `rigid_gain` (paper Eq 19 with the nominal restitutions),
 `rigid_gain_measured` (Eq 19 with the measured restitutions), `rigid_gain_event_driven` (the design's
 event-driven rigid cascade with them, `rigid_events.simulate_rigid_batch`) and
-`rigid_deficit` (`top_velocity_gain / rigid_gain - 1`), `energy_error`, `num_steps`, `t_final`, and the
+`rigid_deficit` (`top_velocity_gain / rigid_gain - 1`; NaN where `rigid_gain` <= 0), `energy_error`, `num_steps`, `t_final`, and the
 top pulse without a step history (`BatchSolution.peak_forces`, `impact_velocities`: running values kept
 by the solver): `peak_force` per interface (N), `top_peak_g` (the top interface's peak force over the
 top mass, in g: the accelerometer's peak), `top_delta_v` (the accelerometer's velocity change:
@@ -75,7 +75,9 @@ VARIABLES = {  # name -> (units, long name)
     "velocity_gains": ("1", "launch velocity of each mass over the drop speed"),
     "rigid_gain": ("1", "rigid independent-collision gain, seed paper Eq 19, nominal restitutions (NaN where a law "
                    "has none: a speed-dependent raw damping, a plastic law)"),
-    "rigid_deficit": ("1", "top_velocity_gain / rigid_gain - 1"),
+    "rigid_deficit": ("1", "top_velocity_gain / rigid_gain - 1 (NaN where rigid_gain is not positive: Eq 19 "
+                      "then leaves the top mass moving down, a design whose cascade the independent-collision "
+                      "model does not describe)"),
     "rigid_gain_measured": ("1", "rigid independent-collision gain, seed paper Eq 19, with each interface's measured "
                             "restitution (NaN unless every interface has one)"),
     "rigid_gain_event_driven": ("1", "top launch velocity of the event-driven rigid cascade (the design's gaps, "
@@ -470,7 +472,7 @@ def _evaluate(text: str, source: str | None, c: int, rows: int | None = None) ->
         eq_hs = np.where(peak_a > 0, np.pi * dv / (2.0 * peak_a), np.nan)
     overlap = overlap_fractions(sol.first_contacts, sol.t_final, dm.ground)
     out = {"status": sol.status_code.astype(np.int8), "top_velocity_gain": gains[:, -1], "velocity_gains": gains,
-           "rigid_gain": rigid, "rigid_deficit": gains[:, -1] / rigid - 1.0, "rigid_gain_measured": rigid_measured,
+           "rigid_gain": rigid, "rigid_deficit": np.where(rigid > 0, gains[:, -1] / np.where(rigid > 0, rigid, 1.0) - 1.0, np.nan), "rigid_gain_measured": rigid_measured,
            "rigid_gain_event_driven": rigid_event, "energy_error": sol.energy_error,
            "num_steps": sol.num_steps.astype(np.int64), "t_final": sol.t_final,
            "peak_force": sol.peak_forces, "top_peak_g": peak_a / G0, "top_delta_v": dv, "top_equivalent_half_sine": eq_hs,

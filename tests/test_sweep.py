@@ -400,6 +400,21 @@ def test_rigid_gain_with_the_measured_restitutions_is_the_gain_of_independent_co
     assert ds.rigid_gain_measured.attrs["units"] == "1"
 
 
+def test_rigid_deficit_is_nan_where_eq19_leaves_the_top_falling(tmp_path):
+    """A top mass 20 times the bottom one: Eq 19 (two independent collisions, ground then pair) gives
+    the top ((1 + e) e m1 - (m2 - e m1)) / (m1 + m2) = -0.8457 of the drop speed (e = 0.8), downwards; a
+    deficit against a negative gain means nothing, so it is NaN (it was gain / -0.85 - 1)."""
+    doc = {"drop": {"impact_velocity": "1 m/s"}, "stack": {"masses": [1.0, 20.0], "gaps": "1 mm"},
+           "contact": {"law": "tsuji", "stiffness": "1e9 N/m^1.5", "restitution": 0.8},
+           "sweep": {"axis": [{"key": "contact.restitution", "values": [0.8]}]}}
+    path = tmp_path / "heavy_top.toml"
+    path.write_text(tomli_w.dumps(doc))
+    ds = _open(sweep(path, tmp_path / "heavy_top.zarr").path)
+    m1, m2, e = 1.0, 20.0, 0.8
+    np.testing.assert_allclose(ds.rigid_gain, ((1 + e) * e * m1 - (m2 - e * m1)) / (m1 + m2), rtol=1e-12)
+    assert np.all(np.isfinite(ds.top_velocity_gain)) and np.all(np.isnan(ds.rigid_deficit))
+
+
 def test_time_estimate_before_the_run_from_the_last_sweep_of_the_same_structure(tmp_path, monkeypatch):
     # Issue 20: "before anything runs, the command prints the number of designs and an estimate of time".
     # The first sweep of a structure has nothing to time it by (it says so; an estimate follows its first
