@@ -424,6 +424,9 @@ def _tolerance(raw, key: str) -> tuple[float, float]:
                              "for a one-sided tolerance, e.g. [-20, 0]")
     lo, hi = (-abs(vals[0]), abs(vals[0])) if len(vals) == 1 else (float(vals[0]), float(vals[1]))
     if not (-100 < lo <= 0 <= hi):
+        if len(vals) == 1:  # a single number: say so in its own terms (a review: 200 was told of lists only)
+            raise StackFileError(f"test.{key}: {raw!r} is invalid: a percentage below 100 (10 = ±10 %; a value "
+                                 "may not fall by 100 % or more), or [below, above] with -100 < below <= 0 <= above")
         raise StackFileError(f"test.{key}: {raw!r} is invalid: [below, above] with -100 < below <= 0 <= above (percent)")
     return (lo, hi)
 

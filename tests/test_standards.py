@@ -167,6 +167,7 @@ def test_test_section_overrides_the_row():
     ({"standard": "JESD22-B110 B", "peak_tolerance": [5, 10]}, "test.peak_tolerance"),
     # a negative ± tolerance is a typo (it was read as ±5 %)
     ({"standard": "JESD22-B110 B", "peak_tolerance": -5}, "test.peak_tolerance: -5 is invalid: a percentage >= 0"),
+    ({"standard": "JESD22-B110 B", "peak_tolerance": 200}, "test.peak_tolerance: 200 is invalid: a percentage below 100"),
     ({"standard": "JESD22-B110 B", "duration_tolerance": -30}, "test.duration_tolerance: -30 is invalid"),
     ({"standard": "JESD22-B110 B", "band": 1.5}, "test.band"),
     ({"standard": "JESD22-B110 B", "duration": "1 kg"}, "test.duration"),
