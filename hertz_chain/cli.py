@@ -592,6 +592,11 @@ def compare(
             _fail(str(exc))
     for note in comparison.notes:
         typer.echo(f"hertz-chain: note: {_one_line(note)}", err=True)
+    status = result_report.status
+    if not status.ok:  # as `check`: the comparison is of a partial pulse
+        typer.echo(f"hertz-chain: {status.text}: the run did not complete; the comparison is of a partial pulse",
+                   err=True)
+        raise typer.Exit(code=status.exit_code)
 
 
 @app.command()
@@ -635,8 +640,11 @@ def fit(
         with progress(f"fitting {stack_file.name} to {measured.name}"):
             result = run_fit(stack_file, record, vary, cfc=cfc, align=align, overrides=overrides)
     except SolverError as exc:
-        typer.echo(f"hertz-chain: {Status.FAILED.text}: {_one_line(exc)}", err=True)
-        raise typer.Exit(code=Status.FAILED.exit_code)
+        status = getattr(exc, "status", None)  # an incomplete run: its own status (`fitting._incomplete`)
+        typer.echo(f"hertz-chain: {_one_line(exc)}" if status else
+                   f"hertz-chain: {Status.FAILED.text}: {_one_line(exc)}", err=True)
+        status = status or Status.FAILED
+        raise typer.Exit(code=status.exit_code)
     except HertzChainError as exc:
         _fail(str(exc))
     typer.echo(report.to_json(result.to_dict()) if as_json else result.table())

@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from .constants import G0
-from .errors import ParameterError, StackFileError
+from .errors import ParameterError, SolverError, StackFileError
 from .keys import KEYS, Slot, check_values, quantity_of, read_bounds, read_entry, resolve
 
 __all__ = ["FIT_KEYS", "FitParameter", "FitResult", "parse_vary_option", "read_fit_file", "fit"]
@@ -238,6 +238,14 @@ def read_fit_file(path, vary_options=(), overrides=None):
     return spec, doc, tuple(slots), bounds, max_eval
 
 
+def _incomplete(what: str, status) -> SolverError:
+    """The `SolverError` of a run that did not complete (`status`, a `Status`, kept on the error for the
+    command line's exit status), with what to change."""
+    err = SolverError(f"{what} ended {status.text}: {status.hint()}; a fit needs complete runs")
+    err.status = status
+    return err
+
+
 def _default_bounds(slot: Slot, start: float) -> tuple[float, float]:
     if slot.key == "contact.stiffness":
         return start / 100.0, start * 100.0
@@ -277,7 +285,7 @@ class _Model:
         sol = simulate(stack, state, **self.opts)
         st = sol.steps
         if st is None or not sol.status.ok:
-            raise RuntimeError(f"the run of the design {np.asarray(x).tolist()} ended {sol.status.text}")
+            raise _incomplete(f"the run of the design {np.asarray(x).tolist()}", sol.status)
         ts = np.asarray(st.t, dtype=float)
         keep = np.isfinite(ts)
         ts = ts[keep]
@@ -365,6 +373,8 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
         hi.append(b[1])
     lo_a, hi_a = np.array(lo), np.array(hi)
     start_report = run_spec(spec)
+    if not start_report.status.ok:  # a fit compares whole pulses (a review: a traceback, exit 1)
+        raise _incomplete(f"{path}: the file's own stack", start_report.status)
     opts = srs_options(spec)
     start = compare(start_report, measured, cfc=cfc, align=align, srs_options=opts)
     log = np.array([KEYS[s.key].log for s in slots])
@@ -411,7 +421,7 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
         theta, message = res.x, str(res.message)
         if res.status <= 0:
             status = OptimizeStatus.NOT_CONVERGED if res.status == 0 else OptimizeStatus.FAILED
-    except RuntimeError as exc:  # a design the solver cannot finish
+    except SolverError as exc:  # a design the solver cannot finish
         theta, status, message = theta0, OptimizeStatus.FAILED, str(exc)
     r, J = residual_and_jacobian(theta)
     N, p = r.size, theta.size

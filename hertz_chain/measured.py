@@ -272,6 +272,7 @@ class Comparison:
     | `sprague_geers` | `(M, P, C)` of the model against the measurement |
     | `srs_frequencies_Hz`, `measured_srs`, `model_srs` | the SRS of each (`srs_options`; default maximax acceleration, Q = 10, g) |
     | `notes` | one line each: what was capped or assumed |
+    | `partial` | the model's run did not complete (`hertz_chain.Status`: t_max or max_steps): its pulse is cut where the run stopped (a note says so) |
     """
 
     t: np.ndarray
@@ -289,6 +290,7 @@ class Comparison:
     notes: tuple[str, ...] = ()
     source: str = ""
     srs_options: Any = None  # `srs.SRSOptions` of both spectra (None: the defaults)
+    partial: bool = False
 
     def to_dict(self) -> dict:
         """JSON-ready summary (SI units, plus g and ms where the key says so)."""
@@ -316,6 +318,7 @@ class Comparison:
                     "frequencies_Hz": self.srs_frequencies_Hz.tolist(), "measured": self.measured_srs.tolist(),
                     "model": self.model_srs.tolist(),
                     "max_abs_difference_dB": float(np.max(np.abs(20 * np.log10(self.model_srs / self.measured_srs))))},
+            "partial": self.partial,
             "notes": list(self.notes),
         }
 
@@ -377,7 +380,8 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
 
     A non-uniform record is resampled linearly at its mean rate first (a note says so, and names any gap
     longer than 5 mean steps); a negative-going record is compared with its sign flipped (a note says
-    so); a note names a pulse that the record's window cuts.
+    so); a note names a pulse that the record's window cuts, and a model run that did not complete
+    (`Comparison.partial`).
 
     **Raises:** `ParameterError` for a report without a top pulse, a bad `cfc`/`align`, or a record
     sampled more coarsely than half the model's pulse (usually a wrong time unit).
@@ -434,6 +438,10 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
         if pm.truncated:
             notes.append(f"the record's window cuts the {who} pulse: its duration and velocity change are measured "
                          "to the window's edge")
+    partial = not report.status.ok
+    if partial:  # a review: a cut model pulse was compared as if whole, exit 0
+        notes.append(f"the model's run did not complete ({report.status.text}): its pulse is cut at "
+                     f"{report.t_final * 1e3:.4g} ms; {report.status.hint()}")
     M, P, C = sprague_geers(meas, model, t)
     D = meas_pm.duration_10
     opts = srs_options if srs_options is not None else SRSOptions()
@@ -453,4 +461,4 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
     s_meas = srs_uniform(meas / unit, 1.0 / h, freqs, opts.Q, **kw)
     s_model = srs_uniform(model / unit, 1.0 / h, freqs, opts.Q, **kw)
     return Comparison(t, meas, model, float(shift), align, cfc, meas_pm, model_pm, (M, P, C), freqs,
-                      s_meas.maximax, s_model.maximax, tuple(notes), measured.source, opts)
+                      s_meas.maximax, s_model.maximax, tuple(notes), measured.source, opts, partial)

@@ -20,7 +20,7 @@ from typer.testing import CliRunner
 
 import hertz_chain as hc
 from hertz_chain.cli import app
-from hertz_chain.errors import StackFileError
+from hertz_chain.errors import SolverError, StackFileError
 
 M, K, V, E, G, SHIFT = 0.1, 1e9, 1.0, 0.7, 9.80665, 1.5e-3
 runner = CliRunner()
@@ -137,6 +137,17 @@ def test_cli_fit_writes_a_stack_file_that_simulates_to_the_fit(files, tmp_path):
 def test_cli_fit_bad_input_is_one_line(files, args, needle):
     res = runner.invoke(app, ["fit", str(files / "start.toml"), str(files / "clean.csv"), *args])
     assert res.exit_code == 2 and needle in res.output and len(res.output.strip().splitlines()) == 1, res.output
+
+
+def test_a_fit_whose_own_run_does_not_complete_says_so(files):
+    """The file's run stopped at 0.1 ms, inside its 0.52 ms contact (3.2145 (m/k)^0.4 v^-0.2, Hertz's
+    closed form, k = 3e8 N/m^1.5): `SolverError` naming t_max in Python, one line and the run's exit status
+    (3) on the command line (was a RuntimeError's traceback, exit 1)."""
+    with pytest.raises(SolverError, match="the file's own stack ended incomplete: t_max reached: .*raise solver.t_max"):
+        hc.fit(files / "start.toml", files / "clean.csv", VARY, overrides=['solver.t_max="0.1 ms"'])
+    res = runner.invoke(app, ["fit", str(files / "start.toml"), str(files / "clean.csv"), "--vary", VARY[0],
+                              "--set", 'solver.t_max="0.1 ms"'])
+    assert res.exit_code == 3 and len(res.output.strip().splitlines()) == 1 and "t_max reached" in res.output
 
 
 def test_fit_section_with_bounds(files, tmp_path):

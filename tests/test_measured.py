@@ -21,6 +21,7 @@ from hertz_chain.cli import app
 from hertz_chain.constants import G0
 from hertz_chain.errors import ParameterError
 from hertz_chain.measured import align_shift, compare, read_pulse_csv, sprague_geers
+from hertz_chain.status import Status
 
 runner = CliRunner()
 M, K, V = 0.1, 1e9, 1.0
@@ -155,6 +156,13 @@ def test_cli_compare(files):
     assert res.exit_code == 2 and "--time-unit" in res.output
     res = runner.invoke(app, ["compare", str(files / "stack.toml"), str(files / "clean.csv"), "--cfc", "500"])
     assert res.exit_code == 2 and "--cfc" in res.output
+    # a run stopped at 0.2 ms, inside the 0.32 ms contact (3.2145 (m/k)^0.4 v^-0.2, Hertz's closed form):
+    # the comparison is of a cut pulse, said so, with the run's exit status (as `check`; was exit 0, unsaid)
+    res = runner.invoke(app, ["compare", str(files / "stack.toml"), str(files / "clean.csv"), "--json",
+                              "--set", 'solver.t_max="0.2 ms"'])
+    assert res.exit_code == Status.INCOMPLETE_T_MAX.exit_code == 3, res.output
+    assert json.loads(res.stdout)["partial"] is True
+    assert "incomplete: t_max reached: the run did not complete; the comparison is of a partial pulse" in res.output
 
 
 def test_negative_going_record_is_flipped_with_a_note(files, report, tmp_path):
