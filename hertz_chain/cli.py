@@ -521,6 +521,11 @@ def check(
             _paths.write_atomically(plot, lambda tmp: plotting.plot_check(result, tmp), force, "--plot")
         except HertzChainError as exc:
             _fail(str(exc))
+    if standard and ", modified: " in result.spec.name:  # a review: `--standard X` on a file whose [test]
+        # gives its own pulse checked that pulse, under X's name, and passed
+        base, changed = result.spec.name.split(", modified: ", 1)
+        typer.echo(f"hertz-chain: note: the file's [test] section changes {base}'s nominal pulse ({changed}): "
+                   f"this is a check of the changed pulse, not of {base} as written", err=True)
     status = result_report.status
     if not status.ok:
         typer.echo(f"hertz-chain: {status.text}: the run did not complete; the check is of a partial pulse", err=True)

@@ -147,7 +147,14 @@ def find_condition(name: str) -> ShockCondition:
     table = {_norm(c.name): c for c in conditions()}
     if key in table:
         return table[key]
-    names = [c.name for c in conditions()]
+    documents = sorted({c.standard for c in conditions()})
+    same = [d for d in documents if key.startswith(_norm(d.split()[0]))]  # "MIL-STD-883 B" is of MIL-STD-883 2002
+    if not same:  # no suggestion from another document: its levels differ (a review: JESD22-B104 C was
+        # offered B110 C, 100 g / 2 ms for 3000 g / 0.3 ms)
+        raise ParameterError("standard", name, f"not a document of the table (it has {', '.join(documents)}); "
+                             "give the pulse in the [test] section instead: shape, peak_g, duration and their "
+                             "tolerances (docs/lab-workflow.md; hertz-chain check --standard list)")
+    names = [c.name for c in conditions() if c.standard in same]
     close = difflib.get_close_matches(str(name), names, n=3, cutoff=0.5)
     hint = f"did you mean {', '.join(repr(c) for c in close)}? " if close else ""
     raise ParameterError("standard", name, f"{hint}a condition of the table (hertz-chain check --standard list)")

@@ -73,6 +73,14 @@ def test_names_are_forgiving_and_errors_suggest():
     with pytest.raises(ParameterError) as err:
         find_condition("JESD22-B110 Z")
     assert "did you mean" in str(err.value)
+    # no suggestion from another document, whose levels differ (JESD22-B104 C is 3000 g / 0.3 ms, the
+    # table's JESD22-B110 C 100 g / 2 ms, which it used to suggest); the [test] section is named instead
+    for name in ("JESD22-B104 C", "IEC 60068-2-27"):
+        with pytest.raises(ParameterError, match="not a document of the table .*give the pulse in the \\[test\\]") as err:
+            find_condition(name)
+        assert "did you mean" not in str(err.value)
+    with pytest.raises(ParameterError, match="did you mean 'MIL-STD-883 2002 B'"):
+        find_condition("MIL-STD-883 B")  # the document's number without its method: suggested within it
 
 
 def spec(**kw):
@@ -210,6 +218,10 @@ def test_cli_check_fails_with_exit_1_and_bad_input_with_2(tmp_path):
     assert res.exit_code == 1 and "FAIL" in res.stdout
     res = runner.invoke(app, ["check", EXAMPLE, "--standard", "nope"])
     assert res.exit_code == 2 and "standard" in res.output
+    # a --standard whose pulse the file's [test] changes: said (the check is not of the standard as written)
+    res = runner.invoke(app, ["check", EXAMPLE, "--standard", "JESD22-B110 H", "--set", "test.peak_g=1500"])
+    assert ("the file's [test] section changes JESD22-B110 H's nominal pulse (peak_g 1500): this is a check of "
+            "the changed pulse" in res.stderr)
     res = runner.invoke(app, ["check", "examples/mvg6_gapped.toml"])
     assert res.exit_code == 2 and "test: missing" in res.output
 
