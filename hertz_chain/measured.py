@@ -96,7 +96,7 @@ def _factor(unit: str, table: dict, what: str, key: str) -> float:
     for cand in (u, u.lower(), u.replace(" ", "")):
         if cand in table:
             return table[cand]
-    raise ParameterError(key, unit, f"a {what} unit: {', '.join(sorted(set(table)))}")
+    raise ParameterError(key, unit, f"{'an' if what[0] in 'aeiou' else 'a'} {what} unit: {', '.join(sorted(set(table)))}")
 
 
 def read_pulse_csv(path, *, time_unit: str | None = None, accel_unit: str | None = None,
@@ -156,9 +156,9 @@ def read_pulse_csv(path, *, time_unit: str | None = None, accel_unit: str | None
                 raise ParameterError(f"{path}: {what} unit", given,
                                      f"the unit of column {header[col]!r} ({in_header}), or no {option} "
                                      "(the header already says it)")
-        if unit is None:
-            where = f"header {header[col]!r}" if header is not None else "no header"
-            raise ParameterError(f"{path}: {what} unit", where,
+        if unit is None:  # "column 1 'time' = 'no unit' is invalid: ..." (named as the user sees it)
+            where = f"column {col + 1} {header[col]!r}" if header is not None else f"column {col + 1} (no header)"
+            raise ParameterError(f"{path}: {what} unit of {where}", "none given",
                                  f"a unit in the header, e.g. 'time (ms), acceleration (g)', or the "
                                  f"{option} option "
                                  f"({', '.join(sorted(set(table)))})")
@@ -170,7 +170,7 @@ def read_pulse_csv(path, *, time_unit: str | None = None, accel_unit: str | None
         raise ParameterError(f"{path}: data row {bad + 1}", ",".join(rows[bad]),
                              f"numbers in columns {time_column + 1} and {accel_column + 1}") from None
     if data.shape[0] < 3:
-        raise ParameterError(str(path), f"{data.shape[0]} rows", "at least 3 rows of finite numbers")
+        raise ParameterError(f"{path}: data rows", data.shape[0], "at least 3 rows of finite numbers")
     if not np.all(np.isfinite(data)):
         i = int(np.argmin(np.all(np.isfinite(data), axis=1)))
         raise ParameterError(f"{path}: data row {i + 1}", ",".join(rows[i]), "finite numbers (no NaN or inf)")
@@ -179,6 +179,9 @@ def read_pulse_csv(path, *, time_unit: str | None = None, accel_unit: str | None
         i = int(np.argmin(np.diff(t) > 0))
         raise ParameterError(f"{path}: time", f"row {i + 2}: {float(data[i + 1, 0])!r} after {float(data[i, 0])!r}",
                              "strictly increasing times")
+    if not np.any(data[:, 1]):  # named by the file (a review: the pulse metrics' own "a = 'all zeros'")
+        raise ParameterError(f"{path}: acceleration column {accel_column + 1}", "all zeros",
+                             "a record with a non-zero acceleration")
     notes = ()
     ncol = len(header) if header is not None else max(len(r) for r in rows)
     if ncol > 2:

@@ -91,8 +91,11 @@ def test_read_units_from_header_and_options(files):
 
 
 @pytest.mark.parametrize("text, kwargs, needle", [
-    ("0,1\n1,2\n2,3\n", {}, "time unit"),
-    ("time (ms), a (furlong)\n0,1\n1,2\n2,3\n", {}, "acceleration unit"),
+    ("0,1\n1,2\n2,3\n", {}, "time unit of column 1 (no header) = 'none given' is invalid"),
+    ("time, a (g)\n0,1\n1,2\n2,3\n", {}, "time unit of column 1 'time' = 'none given' is invalid"),
+    ("time (ms), a (furlong)\n0,1\n1,2\n2,3\n", {}, "acceleration unit = 'furlong' is invalid: an acceleration unit"),
+    ("time (ms), a (g)\n0,0\n1,0\n2,0\n", {}, "m.csv: acceleration column 2 = 'all zeros' is invalid"),
+    ("time (ms), a (g)\n", {}, "m.csv: data rows = 0 is invalid: at least 3 rows"),
     ("time (ms), a (g)\n0,1\n1,x\n2,3\n", {}, "data row 2"),
     ("time (ms), a (g)\n0,1\n2,2\n1,3\n", {}, "strictly increasing"),
     ("time (ms), a (g)\n0,1\n", {}, "at least 3 rows"),
