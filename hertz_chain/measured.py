@@ -278,18 +278,19 @@ class Comparison:
     | `partial` | the model's run did not complete (`hertz_chain.Status`: t_max or max_steps): its pulse is cut where the run stopped (a note says so) |
     """
 
-    t: np.ndarray
-    measured: np.ndarray
-    model: np.ndarray
+    # arrays out of the repr (a notebook's echo printed hundreds of lines)
+    t: np.ndarray = dataclasses.field(repr=False)
+    measured: np.ndarray = dataclasses.field(repr=False)
+    model: np.ndarray = dataclasses.field(repr=False)
     shift: float
     alignment: str
     cfc: int | None
     measured_metrics: PulseMetrics
     model_metrics: PulseMetrics
     sprague_geers: tuple[float, float, float]
-    srs_frequencies_Hz: np.ndarray
-    measured_srs: np.ndarray
-    model_srs: np.ndarray
+    srs_frequencies_Hz: np.ndarray = dataclasses.field(repr=False)
+    measured_srs: np.ndarray = dataclasses.field(repr=False)
+    model_srs: np.ndarray = dataclasses.field(repr=False)
     notes: tuple[str, ...] = ()
     source: str = ""
     srs_options: Any = None  # `srs.SRSOptions` of both spectra (None: the defaults)

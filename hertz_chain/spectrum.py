@@ -157,10 +157,11 @@ class ShockResponseSpectrum:
     The arrays are read-only.
     """
 
-    frequencies_Hz: np.ndarray
-    primary: np.ndarray
-    residual: np.ndarray
-    maximax: np.ndarray
+    # arrays out of the repr (a notebook's echo of a report printed hundreds of lines)
+    frequencies_Hz: np.ndarray = dataclasses.field(repr=False)
+    primary: np.ndarray = dataclasses.field(repr=False)
+    residual: np.ndarray = dataclasses.field(repr=False)
+    maximax: np.ndarray = dataclasses.field(repr=False)
     Q: float
     sample_rate_Hz: float
     kind: str = "acceleration"  # or "pseudo-velocity" (`KINDS`)
