@@ -351,6 +351,8 @@ def optimize(
     try:
         with progress(f"optimising {stack_file.name}"):
             result = run_optimize(stack_file)
+    except SolverError as exc:
+        _solver_failed(exc)
     except HertzChainError as exc:
         _fail(str(exc))
     typer.echo(report.to_json(result.to_dict()) if as_json else report.optimize_table(result))
@@ -449,6 +451,15 @@ def sweep(
         chunks = f"{result.computed} chunk{'' if result.computed == 1 else 's'}"
         typer.echo(f"{result.path}: {plural(result.designs, 'design')}; {chunks} computed, {result.skipped} "
                    f"already done{rate}; status: {counts}")
+
+
+def _solver_failed(exc: SolverError):
+    """Exit after a `SolverError`: one line, and the exit status of the run's own status where the error
+    carries one (`Status.error`: an incomplete run), else `failed`'s."""
+    status = getattr(exc, "status", None)
+    typer.echo(f"hertz-chain: {_one_line(exc)}" if status else
+               f"hertz-chain: {Status.FAILED.text}: {_one_line(exc)}", err=True)
+    raise typer.Exit(code=(status or Status.FAILED).exit_code)
 
 
 def _as_option(exc: HertzChainError) -> str:
@@ -645,11 +656,7 @@ def fit(
         with progress(f"fitting {stack_file.name} to {measured.name}"):
             result = run_fit(stack_file, record, vary, cfc=cfc, align=align, overrides=overrides)
     except SolverError as exc:
-        status = getattr(exc, "status", None)  # an incomplete run: its own status (`fitting._incomplete`)
-        typer.echo(f"hertz-chain: {_one_line(exc)}" if status else
-                   f"hertz-chain: {Status.FAILED.text}: {_one_line(exc)}", err=True)
-        status = status or Status.FAILED
-        raise typer.Exit(code=status.exit_code)
+        _solver_failed(exc)
     except HertzChainError as exc:
         _fail(str(exc))
     typer.echo(report.to_json(result.to_dict()) if as_json else result.table())

@@ -238,14 +238,6 @@ def read_fit_file(path, vary_options=(), overrides=None):
     return spec, doc, tuple(slots), bounds, max_eval
 
 
-def _incomplete(what: str, status) -> SolverError:
-    """The `SolverError` of a run that did not complete (`status`, a `Status`, kept on the error for the
-    command line's exit status), with what to change."""
-    err = SolverError(f"{what} ended {status.text}: {status.hint()}; a fit needs complete runs")
-    err.status = status
-    return err
-
-
 def _default_bounds(slot: Slot, start: float) -> tuple[float, float]:
     if slot.key == "contact.stiffness":
         return start / 100.0, start * 100.0
@@ -285,7 +277,7 @@ class _Model:
         sol = simulate(stack, state, **self.opts)
         st = sol.steps
         if st is None or not sol.status.ok:
-            raise _incomplete(f"the run of the design {np.asarray(x).tolist()}", sol.status)
+            raise sol.status.error(f"the run of the design {np.asarray(x).tolist()}", "a fit needs complete runs")
         ts = np.asarray(st.t, dtype=float)
         keep = np.isfinite(ts)
         ts = ts[keep]
@@ -374,7 +366,7 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
     lo_a, hi_a = np.array(lo), np.array(hi)
     start_report = run_spec(spec)
     if not start_report.status.ok:  # a fit compares whole pulses (a review: a traceback, exit 1)
-        raise _incomplete(f"{path}: the file's own stack", start_report.status)
+        raise start_report.status.error(f"{path}: the file's own stack", "a fit needs complete runs")
     opts = srs_options(spec)
     start = compare(start_report, measured, cfc=cfc, align=align, srs_options=opts)
     log = np.array([KEYS[s.key].log for s in slots])

@@ -1066,12 +1066,26 @@ def optimize(path: str | Path) -> OptimizeResult:
     """Optimise the stack of the stack file `path` as its `[optimize]` section asks (module docstring).
 
     **Returns** an `OptimizeResult`. **Raises** `StackFileError` for a bad file or `[optimize]` section
-    (one line), before any simulation.
+    (one line), before any simulation; `SolverError` when the file's own stack does not complete (its
+    `status` on the error).
     """
     from .workflow import run_spec
 
     t0 = time.perf_counter()
     spec, problem, spaces = prepare(path)
+    # the file's own run first: a design judged by a run its solver settings cut short means nothing (a
+    # review: with t_max inside the cascade, 22 s of search ended "failed" with gains of -1); a gapped stack
+    # without gravity may stop at t_max by design (its best design is written with until = "launch", below)
+    start = run_spec(spec)
+    ended = start
+    if start.status is Status.INCOMPLETE_T_MAX and spaces[0].dm.gravity <= 0:
+        import copy
+
+        doc = copy.deepcopy(spaces[0].doc)
+        doc.setdefault("solver", {})["until"] = "launch"
+        ended = run_spec(parse_stack(doc, source=str(path)))  # did the top's launch end before t_max?
+    if not ended.status.ok:
+        raise ended.status.error(f"{path}: the file's own stack", "the optimiser compares complete runs")
     ns = [sp.n for sp in spaces]
     best = None
     evaluators = []
@@ -1103,7 +1117,6 @@ def optimize(path: str | Path) -> OptimizeResult:
         # launch is final: the written file stops there (`solver.until = "launch"`)
         doc_best.setdefault("solver", {})["until"] = "launch"
         report = run_spec(parse_stack(doc_best, source=str(path)))
-    start = run_spec(spec)
     rigid, rigid_notes = _rigid_designs(space, np.asarray(report.masses))
     pg = _projected_gradient(ev, top.u)  # NaN on the derivative-free path (None in the JSON)
     agree = sum(abs(r.value - top.value) <= 1e-6 * max(abs(top.value), 1e-2) for r in runs)

@@ -71,6 +71,16 @@ class Status(enum.IntEnum):
                     "tolerances or a smaller Tolerances.max_step")
         return ""
 
+    def error(self, what: str, need: str):
+        """The `SolverError` of a run of `what` that ended so: its status, what to change and `need` (why
+        the caller cannot go on, e.g. "a fit needs complete runs"); the status is kept on the error
+        (`.status`) for the command line's exit code."""
+        from .errors import SolverError
+
+        err = SolverError(f"{what} ended {self.text}: {self.hint()}; {need}")
+        err.status = self
+        return err
+
     def __str__(self) -> str:
         return self.text
 

@@ -23,7 +23,7 @@ import hertz_chain as hc
 from hertz_chain._design import DesignMap
 from hertz_chain.builder import build
 from hertz_chain.cli import main
-from hertz_chain.errors import StackFileError
+from hertz_chain.errors import SolverError, StackFileError
 from hertz_chain.keys import resolve
 from hertz_chain.optimization import _document, optimize, prepare
 from hertz_chain.registry import LAWS
@@ -486,6 +486,21 @@ def test_a_search_cut_short_exits_3_and_still_reports_its_best_point(tmp_path, c
     assert out.exists() and res["masses"] == [1.0, 0.1]
     (note,) = res["convergence"]["start_outside_bounds"]
     assert note.startswith("drop.impact_velocity = 6 (the file's) lies outside its bounds [0.5, 5]")
+
+
+@pytest.mark.parametrize("gravity", [0, "9.80665 m/s^2"])
+def test_a_file_whose_own_run_stops_short_is_refused_before_the_search(tmp_path, capsys, gravity):
+    """t_max = 0.1 ms, inside the first contact of the touching stack (Hertz contact time of 1 kg on
+    0.3 kg at 1 m/s, k = 1e9: 3.2145 (m*/k)^0.4 = 0.26 ms): `SolverError` naming t_max, one line, exit 3,
+    before any search (a review: 22 s of search ended "failed" with gains of -1). Without gravity too,
+    where a gapped stack may stop at t_max by design: its top's launch has not ended either."""
+    doc = BASE | {"drop": {"impact_velocity": "1 m/s", "gravity": gravity}, "solver": {"t_max": "0.1 ms"},
+                  "optimize": {"vary": [{"key": "stack.masses", "index": [2], "bounds": ["10 g", "1 kg"]}]}}
+    path = _write(tmp_path, doc)
+    with pytest.raises(SolverError, match="the file's own stack ended incomplete: t_max reached: .*raise solver.t_max"):
+        hc.optimize(path)
+    code, out, err = _cli(["optimize", str(path)], capsys)
+    assert code == 3 and out == "" and err.count("\n") == 1 and "t_max reached" in err
 
 
 def test_refined_largest_sample_of_a_sine_is_its_peak():
