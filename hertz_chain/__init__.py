@@ -7,7 +7,17 @@ architecture and conventions.
 
 
 import importlib as _importlib
+import os as _os
+import sys as _sys
 from typing import TYPE_CHECKING as _TYPE_CHECKING
+
+# float64 from the import on, also for arrays a user makes before any JAX-using part of the package is
+# loaded (a review: `jnp.array([...])` right after `import hertz_chain` was float32, its values already
+# rounded). JAX not imported yet: its environment default (read when it is imported); imported: set now.
+if "jax" in _sys.modules:
+    _sys.modules["jax"].config.update("jax_enable_x64", True)
+else:
+    _os.environ.setdefault("JAX_ENABLE_X64", "1")
 
 # Public name -> the submodule that defines it. Resolved on first use (PEP 562), so that
 # `import hertz_chain` and `hertz-chain --help` do not pay for importing JAX and diffrax.

@@ -1,7 +1,10 @@
 """The public API: one flat namespace, resolved lazily so that start-up stays cheap."""
 
+import os
 import subprocess
 import sys
+
+import pytest
 
 import hertz_chain as hc
 
@@ -36,6 +39,16 @@ def test_float64_is_on_once_jax_modules_load():
     import jax.numpy as jnp
 
     assert hc.Hertz(1e9).k.dtype == jnp.float64
+
+
+@pytest.mark.parametrize("code", ["import hertz_chain, jax.numpy as jnp", "import jax.numpy as jnp, hertz_chain"])
+def test_float64_is_on_from_the_import(code):
+    """An array made right after `import hertz_chain`, before any part of it that uses JAX is loaded, is
+    float64, whether JAX was imported before or after (a review: it was float32, its values rounded)."""
+    env = {k: v for k, v in os.environ.items() if k != "JAX_ENABLE_X64"}
+    out = subprocess.run([sys.executable, "-c", code + "; print(jnp.array([0.1]).dtype)"], capture_output=True,
+                         text=True, check=True, env=env)
+    assert out.stdout.strip() == "float64"
 
 
 def _devices_in_subprocess(env: dict, code: str = "import hertz_chain.simulation, jax; print(jax.local_device_count())"):
