@@ -83,8 +83,8 @@ def _derived(stack: Stack, y):
         positions=x, velocities=v, accelerations=stack.accelerations(f, x), overlaps=d,
         overlap_rates=dd, forces=f, dissipated=diss, energy=stack.total_energy(y),
     )
-    if q is not None:
-        out["max_overlaps"] = q
+    if q is not None:  # the memory starts at the initial overlap (`Stack.initial_vector`): 0 before a contact
+        out["max_overlaps"] = jnp.maximum(q, 0.0)
     return out
 
 

@@ -440,6 +440,10 @@ def sweep(
                            on_chunk=estimate)
     except HertzChainError as exc:
         _fail(_as_option(exc))
+    except KeyboardInterrupt:  # a review: Ctrl-C left no word of what was kept
+        typer.echo(f"hertz-chain: sweep interrupted: the chunks written to {output} are kept; run the same "
+                   "command again to resume", err=True)
+        raise typer.Exit(code=130)
     summary = result.to_dict()
     if as_json:
         from .report import to_json

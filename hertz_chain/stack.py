@@ -279,9 +279,13 @@ class Stack(eqx.Module):
         return y[..., 3 * n : 4 * n] if self.has_memory else None
 
     def initial_vector(self, state: "State") -> Array:
-        """The flat SI state `[x, v, D = 0 (, q = 0)]` of `state` (`state_size` entries)."""
+        """The flat SI state `[x, v, D = 0 (, q)]` of `state` (`state_size` entries); a law with memory's
+        `q` (its largest overlap so far) starts at the initial overlaps (`_plastic._ElasticPlastic.memory_rate`:
+        it follows the overlap through the approach, so that nothing switches at the onset)."""
         y = state.flat()
-        return jnp.concatenate([y, jnp.zeros(y.shape[:-1] + (self.n,))], axis=-1) if self.has_memory else y
+        if not self.has_memory:
+            return y
+        return jnp.concatenate([y, self.overlaps(jnp.asarray(state.positions, dtype=float))], axis=-1)
 
     def _map_laws(self, fn, *args: Array, q: Array | None = None) -> Array:
         """Apply `fn(law, *args_of_its_interfaces, q_of_its_interfaces)` group-wise (`q` is None for a law

@@ -383,6 +383,39 @@ def test_fit_and_sweep_design_maps_take_a_plastic_law(tmp_path):
         DesignMap(spec, (), section="optimize.vary")
 
 
+def test_thorntons_gradient_does_not_depend_on_where_rounding_puts_an_onset():
+    """A review's design (four masses, 1 mm gaps, no gravity, the third mass 1e-6 heavier): the derivative
+    of every launch velocity with respect to the drop speed against central differences of solves at
+    1e-13 (step 1e-4), within 1e-4 relative (measured 2e-5). It was 4x off, even in sign (d v_top / dV 8.35
+    against 2.156), and right at the unperturbed design: the memory q started at 0 and grew only while the
+    overlap was positive, so in the primal step across the third contact's onset rounding decided which
+    stages added to it, q left the onset above the overlap, and the replay, linearised there, missed the
+    onset's shift in the peak the unloading curve hangs from. q now follows the overlap from the initial
+    one (`Stack.initial_vector`, `_ElasticPlastic.memory_rate`); the step history's largest overlap
+    equals the overlap up to each first turn (to 1e-8 of the peak: the loading test's slack is 1e-6 of the
+    yield overlap, 1.1e-10 m here)."""
+    import jax
+
+    from hertz_chain.simulation import simulate
+
+    law = hc.make_law("thornton", stiffness=1e9, yield_pressure=1e9, effective_radius=5e-3)
+    stack = hc.Stack(jnp.asarray([1.0, 0.4, 0.15 * (1 + 1e-6), 0.06]), law, gravity=0.0)
+
+    def launch(v, tol=None):
+        return hc.launch_velocity(stack, hc.at_impact(stack, v, 1e-3), tolerances=tol)
+
+    grad = np.asarray(jax.jacrev(launch)(1.0))
+    t13 = hc.Tolerances(rtol=1e-13, atol=1e-13)
+    fd = (np.asarray(launch(1.0 + 1e-4, t13)) - np.asarray(launch(1.0 - 1e-4, t13))) / 2e-4
+    np.testing.assert_allclose(grad, fd, rtol=1e-4)
+    # the memory follows the overlap up to the first turn: q = delta to rounding through every onset
+    st = simulate(stack, hc.at_impact(stack, 1.0, 1e-3)).steps
+    d, q = np.asarray(st.overlaps), np.asarray(st.max_overlaps)
+    for j in range(4):
+        first = slice(0, int(np.argmax(d[:, j])) + 1)  # up to the first contact's turn
+        np.testing.assert_allclose(q[first, j], np.maximum(d[first, j], 0.0), rtol=0, atol=1e-8 * d[:, j].max())
+
+
 def test_thorntons_gradient_matches_central_differences_and_jackson_greens_is_refused():
     """The derivative through Thornton's law (reverse mode, under gravity, the default) against central
     differences of solves at 1e-13 (step 1e-4 relative): within 2e-5 relative (measured 3.5e-6), because the
