@@ -296,7 +296,7 @@ def simulate(
     sol = _to_solution(out | {"status_code": out["status"]}, stack, state)
     if throw and sol.status in (Status.INCOMPLETE_MAX_STEPS, Status.FAILED):
         raise SolverError(f"{sol.status} at t = {sol.t_final:.6g} s after {sol.num_steps} steps for the design "
-                          f"({_describe(stack)}); hint: {sol.status.hint(max_steps)}")
+                          f"({_describe(stack)}); hint: {sol.status.hint(max_steps).replace('solver.', '')}")  # Python's words
     return sol
 
 

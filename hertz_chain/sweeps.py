@@ -68,6 +68,9 @@ MAX_DESIGNS = 100_000_000
 #: the sampled designs of a random sweep are drawn once per process when they are at most this many
 #: numbers (256 MB); larger sets are drawn again for every chunk, so that memory stays bounded
 SAMPLES_KEPT = 32_000_000
+UNRUN = "not simulated (a sampled value outside what its key allows)"
+"""`SweepResult.status_counts`' key for the designs a sample put outside a key's range (status `failed`,
+no step)."""
 VARIABLES = {  # name -> (units, long name)
     "status": ("1", "run status code (hertz_chain.status.Status: 0 complete, 1 with rebounds, 2-3 incomplete, "
                "4 no contact, 5 failed)"),
@@ -472,7 +475,7 @@ def _evaluate(text: str, source: str | None, c: int, rows: int | None = None) ->
         eq_hs = np.where(peak_a > 0, np.pi * dv / (2.0 * peak_a), np.nan)
     overlap = overlap_fractions(sol.first_contacts, sol.t_final, dm.ground)
     out = {"status": sol.status_code.astype(np.int8), "top_velocity_gain": gains[:, -1], "velocity_gains": gains,
-           "rigid_gain": rigid, "rigid_deficit": np.where(rigid > 0, gains[:, -1] / np.where(rigid > 0, rigid, 1.0) - 1.0, np.nan), "rigid_gain_measured": rigid_measured,
+           "rigid_gain": rigid, "rigid_deficit": rigid_deficit(gains[:, -1], rigid), "rigid_gain_measured": rigid_measured,
            "rigid_gain_event_driven": rigid_event, "energy_error": sol.energy_error,
            "num_steps": sol.num_steps.astype(np.int64), "t_final": sol.t_final,
            "peak_force": sol.peak_forces, "top_peak_g": peak_a / G0, "top_delta_v": dv, "top_equivalent_half_sine": eq_hs,
@@ -939,10 +942,27 @@ def _sweep(path, output, plan, text, client, workers, scheduler, progress, on_ch
 
     from .status import Status
 
-    codes, k = np.unique(np.asarray(zarr.open_array(str(output / "status"), mode="r")[...]), return_counts=True)
+    status = np.asarray(zarr.open_array(str(output / "status"), mode="r")[...]).ravel()
+    # a design whose sampled value lies outside what its key allows is not simulated (`_evaluate`): failed
+    # with no step; counted apart (a review: a Monte-Carlo tail read as 23 solver failures)
+    unrun = (status == int(Status.FAILED)) & (
+        np.asarray(zarr.open_array(str(output / "num_steps"), mode="r")[...]).ravel() == 0)
+    codes, k = np.unique(status[~unrun], return_counts=True)
     store_counts = {Status(int(c)).text: int(v) for c, v in zip(codes, k) if c >= 0}
+    if unrun.any():
+        store_counts[UNRUN] = int(unrun.sum())
     return SweepResult(output, plan.size, plan.n_chunks, len(todo), plan.n_chunks - len(todo),
                        time.perf_counter() - t0, store_counts)
+
+
+def rigid_deficit(gain, rigid) -> np.ndarray:
+    """`gain / rigid - 1` (the store's `rigid_deficit`), NaN where the rigid gain (Eq 19) is not positive:
+    Eq 19 then leaves the top mass moving down (a top heavier than the mass below it), and a deficit
+    against it means nothing (it read gain / -0.85 - 1)."""
+    gain, rigid = np.asarray(gain, dtype=float), np.asarray(rigid, dtype=float)
+    with np.errstate(invalid="ignore"):
+        ok = rigid > 0
+    return np.where(ok, gain / np.where(ok, rigid, 1.0) - 1.0, np.nan)
 
 
 def overlap_fractions(first_contacts, t_final, ground: bool) -> np.ndarray:
