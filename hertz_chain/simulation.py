@@ -79,7 +79,7 @@ gaps less: 1.8e-4 relative measured (three Hertz masses, 2 mm gaps, gravity; wit
 absolute where the exact derivative is 0; viscoelastic 5-7e-5), converging as the tolerance is
 tightened (1.4e-6 at 1e-13). Through Thornton's elastic–plastic law within 2e-5 (the replay also splits
 each step where a contact turns from loading to unloading; 4e-5 over twelve designs 1e-6 apart, with and
-without gravity: docs/contact-laws.md). Derivatives through Jackson–Green (its
+without gravity: docs/contact-laws.md); in its gaps under gravity 5.7e-4 (a review, four masses). Derivatives through Jackson–Green (its
 loading curve jumps where its fit starts: a factor 5,000 off with gaps under gravity) and through an
 implicit solver (kvaerno5: 13-19 % off) are refused with `ParameterError`.
 
