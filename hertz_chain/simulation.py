@@ -421,9 +421,22 @@ def _fail_designs(out: dict, invalid: np.ndarray) -> dict:
             for k, v in out.items()}
 
 
+def _bucket(B: int) -> int:
+    """The number of designs a CPU batch of `B` is solved as: the next power of two, the last design
+    repeated (`_solve_designs`), so that the sizes 1..`CPU_PIECE` compile 8 programs instead of one each
+    (a review: every new batch size compiled again, ~10 s), at most twice the work."""
+    return 1 << max(B - 1, 0).bit_length()
+
+
 def _solve_designs(stacks, states, ts, t_max, cfg, ndev: int) -> dict:
-    """One vmapped solve of the designs, split over the `ndev` devices where there are enough."""
+    """One vmapped solve of the designs, split over the `ndev` devices where there are enough; on a CPU
+    padded to `_bucket(B)` designs (a GPU takes the batch as it is)."""
     B = t_max.shape[0]
+    if jax.default_backend() == "cpu" and _bucket(B) > B:
+        size = _bucket(B)
+        padded = jax.tree.map(lambda a: _grow(a, size) if eqx.is_array(a) else a, (stacks, states, t_max))
+        out = _solve_designs(*padded[:2], ts, padded[2], cfg, ndev)
+        return jax.tree.map(lambda a: a[:B], out)
     if ndev > 1 and B >= 2 * ndev:
         size = B + (-B % ndev)  # repeat the last design so that every device gets the same share
         batched = jax.tree.map(lambda a: _grow(a, size) if eqx.is_array(a) else a, (stacks, states, t_max))
@@ -459,7 +472,9 @@ def simulate_batch(
     step updates the `max_steps`-long buffers of every design by a select, so the cost per step grows
     with `max_steps`: keep `max_steps` near what the designs need (default 4096; a design that needs more
     is flagged "incomplete: max_steps reached"). With several JAX devices (every CPU core is one:
-    module docstring, "Batches") the designs are split over them. On a CPU, more than `CPU_PIECE`
+    module docstring, "Batches") the designs are split over them. On a CPU a batch of up to `CPU_PIECE`
+    is solved as the next power of two, its last design repeated (`_bucket`: the sizes up to 128 share 8
+    compiled programs; the results come back for the designs given). On a CPU, more than `CPU_PIECE`
     designs are solved in pieces of `CPU_PIECE`, taken in the order of the designs' regime number
     (`_regime_numbers`: designs whose cascades take alike many steps share a piece, so fewer lanes wait
     for a piece's slowest design), each piece one vmapped solve, a thread per core taking the next piece as

@@ -1,5 +1,7 @@
 """simulate_batch: the batch equals the individual solves, a failure stays in its design, the split over devices."""
 
+import re
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -211,3 +213,39 @@ def test_the_cascade_rules_running_sums_are_numpys_cumsum(n):
     np.testing.assert_array_equal(jax.vmap(jax.jacrev(_running_sums))(x[0, :, 0]), np.broadcast_to(tri, (9, n, n)))
     hlo = jax.jit(jax.vmap(_running_sums)).lower(x[0]).compile().as_text()
     assert ("reduce-window" in hlo) == (n > UNROLLED_SUMS and n > 1), n
+
+
+def test_cpu_batch_sizes_share_a_program_per_power_of_two(caplog):
+    """On a CPU a batch of B designs is solved as `_bucket(B)` (the next power of two, the last design
+    repeated): after a batch of 5, batches of 6 and 7 compile nothing and look nothing up in the
+    persistent cache (a review: every new batch size up to 128 compiled again, ~10 s each); the padding
+    is cut off (B results), and each design's launch equals its own solve to the batch's tolerance."""
+    import logging
+
+    from hertz_chain.simulation import _bucket
+
+    assert [_bucket(b) for b in range(1, 10)] == [1, 2, 4, 4, 8, 8, 8, 8, 16] and _bucket(128) == 128
+    if jax.default_backend() != "cpu":
+        pytest.skip("a GPU takes the batch as it is")
+    law = HuntCrossley.from_restitution(1e9, 0.83, calibration_velocity=1.0)  # a structure no other test batches
+
+    def run(B):
+        stacks = [Stack([1.0, 0.5, 0.2 + 0.01 * i], law, gravity=G) for i in range(B)]
+        states = [at_impact(s, 1.0, 1e-3) for s in stacks]
+        return simulate_batch(stack_designs(stacks), jax.tree.map(lambda *x: np.stack(x), *states),
+                              save_steps=False), stacks, states
+
+    solve = re.compile(r"compilation of jit\((run|_vmapped)\)|cache (hit|miss) for 'jit_(run|_vmapped)'")
+    jax.config.update("jax_log_compiles", True)
+    try:
+        with caplog.at_level(logging.DEBUG, logger="jax"):
+            run(5)
+            caplog.clear()
+            sols = [run(6), run(7)]
+            assert not [r.message for r in caplog.records if solve.search(r.message)]
+    finally:
+        jax.config.update("jax_log_compiles", False)
+    sol, stacks, states = sols[1]
+    assert sol.launch_velocities.shape == (7, 3) and np.all(sol.status_code == 0)
+    one = simulate(stacks[6], states[6])
+    assert sol.launch_velocities[6, -1] == pytest.approx(float(one.launch_velocities[-1]), rel=1e-8)
