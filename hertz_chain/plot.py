@@ -187,13 +187,13 @@ def plot_sweep(store: str | Path, path: str | Path, *, x: str, y: str | None = N
         fixed = rest[1:] if y is None else rest  # a line plot: one line per value of the first other axis
         if fixed:
             da = da.isel({d: 0 for d in fixed})
-            title += "; at " + ", ".join(f"{d} = {float(ds[d][0]):.4g}" for d in fixed if d in ds.coords)
+            title += "; at " + ", ".join(f"{d} = {float(ds[d][0]):.4g}{_unit(ds, d)}" for d in fixed if d in ds.coords)
         if y is None:
             lines = [d for d in da.dims if d != x]
             if lines:
                 for k in range(da.sizes[lines[0]]):
                     ax.plot(ds[x], da.isel({lines[0]: k}), marker="o", ms=3,
-                            label=f"{lines[0]} = {float(ds[lines[0]][k]):.4g}")
+                            label=f"{lines[0]} = {float(ds[lines[0]][k]):.4g}{_unit(ds, lines[0])}")
                 ax.legend(fontsize="small")
             else:
                 ax.plot(ds[x], da, marker="o", ms=3)
@@ -217,6 +217,13 @@ def _variable_names() -> tuple[str, ...]:
     from .sweeps import VARIABLES
 
     return tuple(VARIABLES)
+
+
+def _unit(ds, name) -> str:
+    """` m` (the coordinate's `units` attribute, SI) for a legend or title value, '' without one or for 1
+    (a review: legends read "stack.gaps = 1e-06")."""
+    u = str(ds[name].attrs.get("units", "")) if name in ds.variables else ""
+    return f" {u}" if u and u != "1" else ""
 
 
 def _label(ds, name: str) -> str:

@@ -680,6 +680,14 @@ class SweepResult:
     seconds: float
     status_counts: dict
 
+    def dataset(self):
+        """The store as a lazily loaded `xarray.Dataset` (`xarray.open_zarr(path, consolidated=False)`:
+        the store keeps no consolidated metadata, since chunks are written as they finish, so plain
+        `open_zarr` warns and then reads it the same way)."""
+        import xarray as xr
+
+        return xr.open_zarr(self.path, consolidated=False)
+
     def to_dict(self) -> dict:
         return {"output": str(self.path), "designs": self.designs, "chunks": self.chunks, "computed": self.computed,
                 "skipped": self.skipped, "seconds": self.seconds,

@@ -260,7 +260,7 @@ def test_monte_carlo_tails_outside_a_key_s_range_are_failed_designs_not_a_failed
     path = tmp_path / "mc.toml"
     path.write_text(tomli_w.dumps(doc))
     result = sweep(path, tmp_path / "mc.zarr")
-    ds = _open(result.path)
+    ds = result.dataset().load()  # `SweepResult.dataset`: the store opened as the docs say
     gaps = ds["stack.gaps"].values
     rng = np.random.default_rng(1)
     np.testing.assert_allclose(gaps, 0.5e-3 * rng.standard_normal(8), rtol=1e-15)  # numpy's own draw
@@ -557,3 +557,14 @@ def test_a_store_is_resumed_in_its_own_chunk_layout(tmp_path):
     fresh = _open(tmp_path / "new.zarr")
     np.testing.assert_allclose(ds.top_velocity_gain, fresh.top_velocity_gain, rtol=1e-8)
     np.testing.assert_array_equal(ds.status, fresh.status)
+
+
+def test_plot_legends_and_titles_carry_the_axis_units():
+    """`hertz-chain plot`'s legend and title values name their unit (the coordinate's `units`, as the axis
+    labels do; a review: legends read "stack.gaps = 1e-06"); a dimensionless one (units "1") none."""
+    from hertz_chain.plot import _label, _unit
+
+    ds = xr.Dataset(coords={"stack.gaps": ("g", [0.0, 1e-6], {"units": "m"}),
+                            "contact.restitution": ("e", [0.5], {"units": "1"})})
+    assert _unit(ds, "stack.gaps") == " m" and _unit(ds, "contact.restitution") == ""
+    assert _label(ds, "stack.gaps") == "stack.gaps (m)" and _unit(ds, "missing") == ""
