@@ -67,8 +67,9 @@ class _ElasticPlastic(AbstractContactLaw):
         return self.elastic_force(delta, q)
 
     def memory_rate(self, delta: ArrayLike, delta_dot: ArrayLike, q: ArrayLike) -> Array:
-        """``dq/dt``: the overlap rate while ``delta`` is at its largest so far (``delta >= q``, within
-        `MEMORY_SLACK` of ``|q|``) and growing, else 0.
+        """``dq/dt``: the overlap rate while ``delta`` is at its largest so far (``delta >= q`` up to the
+        slack ``MEMORY_SLACK |q| + MEMORY_FLOOR delta_y``, ``delta_y`` the law's `_yield_overlap`) and growing,
+        else 0.
 
         ``q`` starts at the initial overlap (`Stack.initial_vector`: minus the gap), so it follows
         ``delta`` through the approach and the onset alike: a Runge–Kutta step gives both the same
