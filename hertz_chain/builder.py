@@ -127,7 +127,7 @@ def design_masses(spec: StackSpec) -> np.ndarray:
             m1 = d.bottom_mass
         else:
             m1 = d.top_mass / float(met_mass_ratio(d.restitution, d.n))
-        return np.asarray(met_design(1.0, d.restitution, m1=m1, n=d.n).masses, dtype=float)
+        return np.asarray(met_design(None, d.restitution, n=d.n, m1=m1).masses, dtype=float)
     R = d.mass_ratio if d.mass_ratio is not None else d.top_mass / d.bottom_mass
     m1 = d.bottom_mass if d.bottom_mass is not None else d.top_mass / R
     return np.asarray(met_design(R, d.restitution, m1=m1).masses, dtype=float)

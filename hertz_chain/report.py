@@ -458,6 +458,10 @@ def design_table(cmp) -> str:
     note = _end_mass_note(cmp)
     if note:
         lines.append("note: " + note)
+    if mvg.gain <= 0:  # a review: -R 0.5 -e 0.001 printed G = -0.3320 and ratios of -331.67 without a word
+        lines.append(f"note: the MVG gain G = {mvg.gain:.4g} <= 0: with e = {mvg.restitution:.6g} the top mass is not "
+                     "launched upward (V_n = G v_ff), so the stack amplifies nothing and Eq 20's picture of "
+                     "independent collisions no longer holds (the top mass meets the one below again)")
     return "\n".join(lines)
 
 

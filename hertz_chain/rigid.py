@@ -84,8 +84,32 @@ __all__ = [
 # validation helpers
 
 
-def _arr(x) -> np.ndarray:
-    return np.asarray(x, dtype=float)
+#: The most masses a function of this module builds an array for (`mvg_masses`, `met_masses`, the designs):
+#: 10^6 masses are 8 MB; a typo such as `n = 10**10` would ask for 80 GB (the closed forms of a gain take
+#: any `n`).
+MAX_ARRAY_MASSES = 1_000_000
+
+
+def _arr(x, name: str = "value") -> np.ndarray:
+    """`x` as a float array, or a `ParameterError` naming `name` (text, lists of text, `None`, ragged
+    lists: numpy's own ValueError/TypeError did not say which argument)."""
+    a = x if isinstance(x, np.ndarray) else None
+    try:
+        a = np.asarray(x)
+        if a.dtype.kind not in "iuf":
+            raise TypeError
+        return a.astype(float)
+    except (TypeError, ValueError):
+        shown = x if a is None or a.dtype.kind not in "iufb" else _show(a)
+        raise ParameterError(name, shown, "a real number (or an array of real numbers)") from None
+
+
+def _scalar(x, name: str) -> float:
+    """One real number (`ParameterError` for text or an array of more than one value)."""
+    a = _arr(x, name)
+    if a.size != 1:
+        raise ParameterError(name, _show(a), "a single number (this function designs one stack)")
+    return float(a.reshape(()))
 
 
 def _check_finite(name: str, x: np.ndarray) -> None:
@@ -101,7 +125,7 @@ def _show(x):
 def _check_e(x, name: str = "e", *, allow_zero: bool = True) -> np.ndarray:
     """A pair's coefficient of restitution: `[0, 1]` (0 = perfectly plastic: the pair moves on together),
     or `(0, 1]` where a formula needs `e > 0` (the MET ratios, Eq 27, vanish at `e = 0`)."""
-    x = _arr(x)
+    x = _arr(x, name)
     _check_finite(name, x)
     ok = (x >= 0) if allow_zero else (x > 0)
     if not np.all(ok & (x <= 1)):
@@ -111,7 +135,7 @@ def _check_e(x, name: str = "e", *, allow_zero: bool = True) -> np.ndarray:
 
 
 def _check_ground_e(x, name: str = "ground_restitution") -> np.ndarray:
-    x = _arr(x)
+    x = _arr(x, name)
     _check_finite(name, x)
     if not np.all(x >= 0):
         raise ParameterError(
@@ -121,7 +145,7 @@ def _check_ground_e(x, name: str = "ground_restitution") -> np.ndarray:
 
 
 def _check_R(x, name: str = "R") -> np.ndarray:
-    x = _arr(x)
+    x = _arr(x, name)
     _check_finite(name, x)
     if not np.all((x > 0) & (x < 1)):
         raise ParameterError(name, _show(x), "mass ratio R = m_n/m_1 must lie in (0, 1)")
@@ -129,25 +153,44 @@ def _check_R(x, name: str = "R") -> np.ndarray:
 
 
 def _check_positive(x, name: str) -> np.ndarray:
-    x = _arr(x)
+    x = _arr(x, name)
     _check_finite(name, x)
     if not np.all(x > 0):
         raise ParameterError(name, _show(x), "must be > 0")
     return x
 
 
-def _check_n(n, name: str = "n") -> np.ndarray:
-    a = np.asarray(n)
-    if a.dtype.kind not in "iu" and not (a.dtype.kind == "f" and np.all(np.isfinite(a)) and np.all(a == np.round(a))):
-        raise ParameterError(name, _show(a), "number of masses must be an integer >= 2")
-    a = a.astype(np.int64)
+def _check_n(n, name: str = "n", maximum: int = 2**53) -> np.ndarray:
+    """An integer number of masses `2 <= n <= maximum` (as int64), checked before any cast (a review:
+    `n = 1e20` was reported as -9223372036854775808); `maximum`: `MAX_ARRAY_MASSES` where an array of `n`
+    masses is built, else 2^53 (float64's exact integers)."""
+    try:
+        a = np.asarray(n)
+    except (TypeError, ValueError):
+        a = np.asarray(None, dtype=object)
+    if a.dtype.kind == "b" or a.dtype.kind not in "iu" and not (
+            a.dtype.kind == "f" and np.all(np.isfinite(a)) and np.all(a == np.round(a))):
+        raise ParameterError(name, _show(a) if a.dtype.kind in "iufb" else n, "number of masses must be an integer >= 2")
     if not np.all(a >= 2):
         raise ParameterError(name, _show(a), "number of masses must be an integer >= 2")
-    return a
+    if not np.all(a <= maximum):
+        why = (f"at most {maximum:,} (the function builds an array of n masses; MAX_ARRAY_MASSES)"
+               if maximum == MAX_ARRAY_MASSES else f"at most 2^53 = {maximum:,}")
+        raise ParameterError(name, _show(a), f"number of masses must be an integer >= 2 and {why}")
+    return a.astype(np.int64)
+
+
+def _one_n(n, name: str = "n") -> int:
+    """One number of masses for a function that builds an array of them (`_check_n`, at most
+    `MAX_ARRAY_MASSES`)."""
+    a = _check_n(n, name, maximum=MAX_ARRAY_MASSES)
+    if a.size != 1:
+        raise ParameterError(name, _show(a), "a single number of masses")
+    return int(a.reshape(()))
 
 
 def _check_g(g, name: str = "g") -> np.ndarray:
-    g = _arr(g)
+    g = _arr(g, name)
     _check_finite(name, g)
     if not np.all(g < 1):
         raise ParameterError(name, _show(g), "initial velocity ratio g = v2/v1 must be < 1 so that the masses collide")
@@ -373,8 +416,8 @@ def mvg_ratio(R, n):
 
 def mvg_masses(R, n: int, m1: float = 1.0) -> np.ndarray:
     """MVG masses `m_i = m_1 R^{(i−1)/(n−1)}`, `i = 1..n` (Eq 15). Scalar `R`, `n`; returns `(n,)`."""
-    R, n = float(_check_R(R)), int(_check_n(n))
-    m1 = float(_check_positive(m1, "m1"))
+    R, n = _scalar(_check_R(R), "R"), _one_n(n)
+    m1 = _scalar(_check_positive(m1, "m1"), "m1")
     return m1 * R ** (np.arange(n) / (n - 1))
 
 
@@ -422,8 +465,11 @@ def mvg_gain_limit(R):
 
 def mvg_total_mass(R, n, m1=1.0):
     """Total mass of the MVG stack `M = m_1 Σ_{i=0}^{n−1} x^i = m_1 (1 − x^n)/(1 − x)`, `x = R^{1/(n−1)}` (Eq 15)."""
-    x, n = mvg_ratio(R, n), _check_n(n)
-    return _check_positive(m1, "m1") * (1 - x**n) / (1 - x)
+    R, n = _check_R(R), _check_n(n)
+    # (1 - x^n)/(1 - x) with ln x = ln R/(n - 1), as expm1's: the plain form is 0/0 = NaN where x rounds to
+    # 1 (R within ~1e-13 of 1, a review: mvg_total_mass(1 - 1e-15, 1000) was NaN, 1000 m_1 meant)
+    ln_x = np.log(R) / (n - 1)
+    return _check_positive(m1, "m1") * np.expm1(n * ln_x) / np.expm1(ln_x)
 
 
 def mvg_efficiency(R, e, n):
@@ -448,6 +494,22 @@ def _check_e_below_one(e) -> np.ndarray:
             "e", _show(e), "the optimal MVG stack needs e < 1: for e = 1 the gain of Eq 20 grows with n "
             "without bound (limit Eq 21); choose n explicitly"
         )
+    return e
+
+
+#: The smallest `e` of the continuous-`n` optimum (`optimal_pair_ratio`): below it the root `x_0` of Eq 23
+#: lies under 1e-300, the bracket's lower end (`h(1e-300) = 6.9e-298 - ln(1 + e)`).
+_E_MIN_CONTINUOUS = 1e-297
+
+
+def _check_e_for_optimum(e) -> np.ndarray:
+    """`e` of the continuous-`n` optimum (Eqs 22-24): `1e-297 <= e < 1` (a review: `e = 0` passed the
+    check of `[0, 1)` and scipy's brentq failed with "f(a) and f(b) must have different signs")."""
+    e = _check_e_below_one(e)
+    if np.any(e < _E_MIN_CONTINUOUS):
+        raise ParameterError("e", _show(e), "the continuous-n optimum (Eqs 22-24) needs e > 0 (as e -> 0 the "
+                             "optimal pair ratio x_0 -> 0 and n* -> 1; in float64, e >= 1e-297); "
+                             "mvg_optimal_n takes e = 0")
     return e
 
 
@@ -498,7 +560,7 @@ def optimal_pair_ratio(e):
     a second root `x_0 > 1` belongs to increasing masses (`R > 1`) — the bracket `(0, 1)` avoids both.
     Solved with `scipy.optimize.brentq` per distinct `e` (`e < 1`).
     """
-    e = _check_e_below_one(e)
+    e = _check_e_for_optimum(e)
     uniq, inv = np.unique(e.ravel(), return_inverse=True)
     roots = np.array([brentq(_stationarity, 1e-300, 1.0, args=(float(ei),), xtol=1e-300, rtol=4 * np.finfo(float).eps,
                              maxiter=500) for ei in uniq])
@@ -519,7 +581,7 @@ def continuous_optimal_gain(R, e):
     Eq 22, `R^{1/(n*−1)} = x_0`, so `G*` is Eq 20 evaluated at the continuous `n*`, i.e. the maximum of
     Eq 20 over real `n`.
     """
-    R, e = _check_R(R), _check_e_below_one(e)
+    R, e = _check_R(R), _check_e_for_optimum(e)
     x0 = optimal_pair_ratio(e)
     ns = np.log(R) / np.log(x0) + 1
     return np.exp(ns * np.log1p(e) - (ns - 1) * np.log1p(x0)) - 1
@@ -529,7 +591,7 @@ def mvg_optimal_n_pb(R, e):
     """`n_max` by the Pöschel–Brilliantov route (paper Eqs 22–24, corrected): the better of
     `floor(n*)` and `ceil(n*)` (both clipped to `>= 2`) by the gain at integer `n` (Eq 20; ties go to
     the smaller `n`). Agrees with `mvg_optimal_n` because Eq 20 is unimodal in `n`."""
-    R, e = np.broadcast_arrays(_check_R(R), _check_e_below_one(e))
+    R, e = np.broadcast_arrays(_check_R(R), _check_e_for_optimum(e))
     ns = continuous_optimal_n(R, e)
     lo = np.maximum(np.floor(ns), 2).astype(np.int64)
     hi = np.maximum(np.ceil(ns), 2).astype(np.int64)
@@ -552,7 +614,7 @@ def met_ratios(e, n: int):
     `e` at the ground and at every pair.
     """
     e = _check_e(e, allow_zero=False)[..., None]
-    n = int(_check_n(n))
+    n = _one_n(n)
     i = np.arange(1, n, dtype=float)
     with np.errstate(invalid="ignore", divide="ignore"):
         inel = (e ** (i + 1) - e) / (e ** (i + 2) - 1)
@@ -692,11 +754,19 @@ class DesignComparison:
         return self.mvg.total_mass / self.met.total_mass
 
 
-def mvg_design(R: float, e: float, n: int | None = None, m1: float = 1.0) -> StackDesign:
+def mvg_design(R: float, e: float, *, n: int | None = None, m1: float = 1.0) -> StackDesign:
     """MVG stack for mass ratio `R` and restitution `e` (Eqs 15, 20): `n` masses, or the optimal
-    `n_max` (`mvg_optimal_n`, needs `e < 1`) when `n` is None. `K` and `M` as in `mvg_efficiency`."""
-    R, e = float(_check_R(R)), float(_check_e(e))
-    n = mvg_optimal_n(R, e) if n is None else int(_check_n(n))
+    `n_max` (`mvg_optimal_n`, needs `e < 1`) when `n` is None. `K` and `M` as in `mvg_efficiency`.
+
+    `n` and `m1` are keyword-only, as in `met_design` (until 2026-11 `mvg_design(R, e, n, m1)` and
+    `met_design(R, e, m1, n)` took them positionally in opposite orders: `met_design(0.012, 0.8, 6)`
+    made a ten-mass stack with `m1 = 6`).
+
+    **Raises:** `ParameterError` for `R` outside `(0, 1)`, `e` outside `[0, 1]` (`e < 1` without `n`),
+    `n` not an integer in `[2, MAX_ARRAY_MASSES]`, `m1 <= 0`, or anything that is not one real number.
+    """
+    R, e = _scalar(_check_R(R), "R"), _scalar(_check_e(e), "e")
+    n = mvg_optimal_n(R, e) if n is None else _one_n(n)
     masses = mvg_masses(R, n, m1)
     return StackDesign(
         kind="MVG",
@@ -710,11 +780,22 @@ def mvg_design(R: float, e: float, n: int | None = None, m1: float = 1.0) -> Sta
     )
 
 
-def met_design(R: float, e: float, m1: float = 1.0, n: int | None = None) -> StackDesign:
+def met_design(R: float | None, e: float, *, n: int | None = None, m1: float = 1.0) -> StackDesign:
     """MET stack for restitution `e` (Eqs 25, 29) with the `n` whose `R_n` is closest to `R`
-    (`met_n_for_ratio`), or the given `n`. `K` and `M` as in `met_efficiency`."""
-    e = float(_check_e(e))
-    n = met_n_for_ratio(R, e) if n is None else int(_check_n(n))
+    (`met_n_for_ratio`), or the given `n` (then `R` may be None: the MET masses follow from `e` and `n`
+    alone, and its `R_n` is the design's `mass_ratio`). `K` and `M` as in `met_efficiency`.
+
+    `n` and `m1` are keyword-only (see `mvg_design`).
+
+    **Raises:** `ParameterError` for `R` outside `(0, 1)` (or None without `n`), `e` outside `(0, 1]`,
+    `n` not an integer in `[2, MAX_ARRAY_MASSES]`, `m1 <= 0`, or anything that is not one real number.
+    """
+    e = _scalar(_check_e(e, allow_zero=False), "e")
+    if R is None and n is None:
+        raise ParameterError("R", None, "give the mass ratio R, or the number of masses n")
+    if R is not None:
+        R = _scalar(_check_R(R), "R")
+    n = met_n_for_ratio(R, e) if n is None else _one_n(n)
     masses = met_masses(e, n, m1)
     return StackDesign(
         kind="MET",
@@ -738,16 +819,19 @@ def design(*, e: float, R: float | None = None, m1: float | None = None, mn: flo
     if R is None:
         if m1 is None or mn is None:
             raise ParameterError("R", None, "give R, or both m1 and mn")
-        m1f, mnf = float(_check_positive(m1, "m1")), float(_check_positive(mn, "mn"))
+        m1f, mnf = _scalar(_check_positive(m1, "m1"), "m1"), _scalar(_check_positive(mn, "mn"), "mn")
         R = mnf / m1f
         if not R < 1:
             raise ParameterError("mn", mnf, f"the top mass must be lighter than m1 = {m1f!r}")
     else:
         if mn is not None:
             raise ParameterError("mn", mn, "give R or the top mass mn, not both")
-        m1f = 1.0 if m1 is None else float(_check_positive(m1, "m1"))
-    R = float(_check_R(R))
-    e = float(_check_e_below_one(e))
+        m1f = 1.0 if m1 is None else _scalar(_check_positive(m1, "m1"), "m1")
+    R = _scalar(_check_R(R), "R")
+    e = _scalar(_arr(e, "e"), "e")
+    if not 0 < e < 1:  # one message for both designs (MET's ratios vanish at e = 0, MVG has no optimum at 1)
+        raise ParameterError("e", e, "coefficient of restitution must lie in (0, 1): the MET ratios of Eq 27 "
+                             "vanish at e = 0, and for e = 1 the MVG gain of Eq 20 grows with n without bound")
     return DesignComparison(mvg=mvg_design(R, e, m1=m1f), met=met_design(R, e, m1=m1f), R=R)
 
 

@@ -56,6 +56,7 @@ import dataclasses
 import numpy as np
 
 from .errors import ParameterError, SolverError
+from .rigid import _arr, _show
 
 __all__ = ["RigidResult", "RigidBatchResult", "simulate_rigid", "simulate_rigid_batch", "COLLISION_DTYPE"]
 
@@ -99,10 +100,14 @@ class RigidResult:
     def gain(self) -> float:
         """`launch velocity of the top mass / |initial velocity of mass 1|`.
 
-        For a dropped stack started at impact (`v_i = −v_ff`, `gaps[0] = 0`, or `gravity = 0`) this is
-        the paper's `G_n = V_n/v_ff` (Eq 19); for a horizontal chain struck by mass 1 it is Eq 13's
-        `G_n = V_n/v_1`. With gravity and `gaps[0] > 0` mass 1's impact speed differs from its initial
-        speed: divide by that yourself.
+        For a dropped stack started at impact (`v_i = −v_ff`) with `gravity = 0` and independent
+        collisions (gaps wide enough) this is the paper's `G_n = V_n/v_ff` (Eq 19); for a horizontal chain
+        struck by mass 1 it is Eq 13's `G_n = V_n/v_1`. Under gravity it differs from Eq 19 (a review:
+        the six-mass MVG stack of R = 0.012, e = 0.8 with 1 cm gaps and g = 9.81 m/s^2, `until = "top_launch"`, gives 4.8628
+        against Eq 19's 5.0407: gravity slows the masses between impacts), and with `gaps[0] > 0` mass 1's
+        impact speed differs from its initial speed: divide by that yourself.
+
+        **Raises:** `ParameterError` where mass 1 starts at rest (`velocities[0] = 0`).
         """
         v1 = abs(float(self.initial_velocities[0]))
         if v1 == 0:
@@ -134,6 +139,24 @@ def _contact_time(s: float, u: float, a: float, vtol: float) -> float:
     big_a = -a
     root = np.sqrt(u * u + 2.0 * big_a * s)
     return 2.0 * s / (root - u) if u <= 0.0 else (u + root) / big_a
+
+
+def _check_max_collisions(x) -> int:
+    """A positive integer (`ParameterError` naming `max_collisions` for text, NaN or a fraction)."""
+    try:
+        ok = not isinstance(x, bool) and int(x) == x and x >= 1
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise ParameterError("max_collisions", x, "a positive integer")
+    return int(x)
+
+
+def _first_bad(name: str, x: np.ndarray, ok: np.ndarray) -> tuple[str, float]:
+    """The name and value of the first entry of `x` where `ok` is False: `("masses[3, 1]", -0.2)` (a
+    review: the batch's messages read `masses = 'non-positive or non-finite'`)."""
+    idx = tuple(int(i) for i in np.argwhere(~ok)[0])
+    return f"{name}[{', '.join(map(str, idx))}]", float(x[idx])
 
 
 def simulate_rigid(
@@ -172,19 +195,19 @@ def simulate_rigid(
     With independent collisions (large, suitably chosen gaps, `gravity = 0`) the top's launch velocity
     reproduces Eq 13 (no ground) and Eq 19 (ground): see `tests/test_rigid_events.py`.
     """
-    m = np.asarray(masses, dtype=float)
+    m = _arr(masses, "masses")
     if m.ndim != 1 or m.size < 1:
         raise ParameterError("masses", masses, "must be a 1-D array of at least one mass")
     n = m.size
     if not np.all(np.isfinite(m) & (m > 0)):
         raise ParameterError("masses", m.tolist(), "masses must be finite and > 0")
-    v = np.array(velocities, dtype=float)
+    v = _arr(velocities, "velocities").copy()
     if v.shape != (n,) or not np.all(np.isfinite(v)):
         raise ParameterError("velocities", velocities, f"must be {n} finite numbers (one per mass)")
-    gp = np.array(gaps, dtype=float)
+    gp = _arr(gaps, "gaps").copy()
     if gp.shape != (n,) or not np.all(np.isfinite(gp) & (gp >= 0)):
         raise ParameterError("gaps", gaps, f"must be {n} finite numbers >= 0 (gaps[0] = height of mass 1)")
-    e_arr = np.asarray(restitution, dtype=float)
+    e_arr = _arr(restitution, "restitution")
     if e_arr.ndim == 0:
         e_arr = np.full(n, float(e_arr))
     if e_arr.shape != (n,):
@@ -194,21 +217,24 @@ def simulate_rigid(
         raise ParameterError("restitution", e_arr.tolist(), "pair restitution must lie in [0, 1]")
     ground = ground_restitution is not None
     if ground:
-        e0 = float(ground_restitution)
+        e0 = _arr(ground_restitution, "ground_restitution")
+        if e0.ndim:
+            raise ParameterError("ground_restitution", _show(e0), "one number (or None: no ground)")
+        e0 = float(e0)
         if not (np.isfinite(e0) and e0 >= 0):
             raise ParameterError("ground_restitution", ground_restitution, "must be >= 0 (may exceed 1) or None")
     else:
         e0 = np.nan
         gp[0] = np.nan
-    g = float(gravity)
-    if not (np.isfinite(g) and g >= 0):
-        raise ParameterError("gravity", gravity, "must be finite and >= 0 (acts downward)")
+    g = _arr(gravity, "gravity")
+    if g.ndim or not (np.isfinite(g) and g >= 0):
+        raise ParameterError("gravity", _show(g), "one finite number >= 0 (acts downward)")
+    g = float(g)
+    t_max = _arr(t_max, "t_max")
+    if t_max.ndim or not t_max > 0:
+        raise ParameterError("t_max", _show(t_max), "one number > 0")
     t_max = float(t_max)
-    if not t_max > 0:
-        raise ParameterError("t_max", t_max, "must be > 0")
-    if int(max_collisions) != max_collisions or max_collisions < 1:
-        raise ParameterError("max_collisions", max_collisions, "must be a positive integer")
-    max_collisions = int(max_collisions)
+    max_collisions = _check_max_collisions(max_collisions)
     if until not in UNTIL:
         raise ParameterError("until", until, f"one of {', '.join(UNTIL)}")
 
@@ -440,43 +466,46 @@ def simulate_rigid_batch(masses, velocities, gaps, restitution, ground_restituti
 
     **Raises:** `ParameterError` for arrays of the wrong shape or values outside those ranges.
     """
-    m = np.asarray(masses, dtype=float)
+    m = _arr(masses, "masses")
     if m.ndim != 2 or m.shape[1] < 1:
         raise ParameterError("masses", m.shape, "a (B, n) array of masses, n >= 1")
     B, n = m.shape
     if not np.all(np.isfinite(m) & (m > 0)):
-        raise ParameterError("masses", "non-positive or non-finite", "masses must be finite and > 0")
-    v = np.array(velocities, dtype=float)
-    gp = np.array(gaps, dtype=float)
-    e = np.array(restitution, dtype=float)
+        raise ParameterError(*_first_bad("masses", m, np.isfinite(m) & (m > 0)), "masses must be finite and > 0")
+    v = _arr(velocities, "velocities").copy()
+    gp = _arr(gaps, "gaps").copy()
+    e = _arr(restitution, "restitution").copy()
     if e.ndim == 0:  # one value for every interface of every stack, as `simulate_rigid` takes
         e = np.full((B, n), float(e))
     for name, x in (("velocities", v), ("gaps", gp), ("restitution", e)):
         if x.shape != (B, n):
             raise ParameterError(name, x.shape, f"a ({B}, {n}) array, one row per stack")
     if not np.all(np.isfinite(v)):
-        raise ParameterError("velocities", "non-finite", "finite velocities")
+        raise ParameterError(*_first_bad("velocities", v, np.isfinite(v)), "finite velocities")
     v0 = v.copy()
     if not np.all(np.isfinite(gp) & (gp >= 0)):
-        raise ParameterError("gaps", "negative or non-finite", "finite gaps >= 0")
-    if not np.all(np.isfinite(e[:, 1:]) & (e[:, 1:] >= 0) & (e[:, 1:] <= 1)):
-        raise ParameterError("restitution", "outside [0, 1]", "pair restitutions in [0, 1]")
+        raise ParameterError(*_first_bad("gaps", gp, np.isfinite(gp) & (gp >= 0)), "finite gaps >= 0")
+    pair = np.ones_like(e, dtype=bool)
+    pair[:, 1:] = np.isfinite(e[:, 1:]) & (e[:, 1:] >= 0) & (e[:, 1:] <= 1)
+    if not np.all(pair):
+        raise ParameterError(*_first_bad("restitution", e, pair), "pair restitutions in [0, 1] (column 0, the "
+                             "ground's, is ground_restitution's)")
     for name, x in (("ground_restitution", ground_restitution), ("gravity", gravity)):
         if x is not None and np.ndim(x) not in (0, 1) or np.ndim(x) == 1 and np.shape(x) != (B,):
             raise ParameterError(name, np.shape(x), f"a scalar or {B} values, one per stack")
     ground = ground_restitution is not None
     if ground:
-        e0 = np.broadcast_to(np.asarray(ground_restitution, dtype=float), (B,)).copy()
+        e0 = np.broadcast_to(_arr(ground_restitution, "ground_restitution"), (B,)).copy()
         if not np.all(np.isfinite(e0) & (e0 >= 0)):
-            raise ParameterError("ground_restitution", "negative or non-finite", "values >= 0 (may exceed 1) or None")
+            raise ParameterError(*_first_bad("ground_restitution", e0, np.isfinite(e0) & (e0 >= 0)),
+                                 "values >= 0 (may exceed 1) or None")
     else:
         e0 = np.full(B, np.nan)
         gp[:, 0] = np.nan
-    g = np.broadcast_to(np.asarray(gravity, dtype=float), (B,)).copy()
+    g = np.broadcast_to(_arr(gravity, "gravity"), (B,)).copy()
     if not np.all(np.isfinite(g) & (g >= 0)):
-        raise ParameterError("gravity", "negative or non-finite", "finite values >= 0 (acts downward)")
-    if int(max_collisions) != max_collisions or max_collisions < 1:
-        raise ParameterError("max_collisions", max_collisions, "must be a positive integer")
+        raise ParameterError(*_first_bad("gravity", g, np.isfinite(g) & (g >= 0)), "finite values >= 0 (acts downward)")
+    max_collisions = _check_max_collisions(max_collisions)
     if until not in UNTIL:
         raise ParameterError("until", until, f"one of {', '.join(UNTIL)}")
 

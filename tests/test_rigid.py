@@ -340,8 +340,46 @@ def test_efficiency_and_total_mass_from_energies():
     assert rigid.met_efficiency(1.0, 7) == pytest.approx(1.0, rel=1e-13)  # elastic MET: all energy on top
 
 
+def test_mvg_total_mass_near_r_one_is_the_sum_of_the_masses():
+    """Eq 15's geometric sum (1 - x^n)/(1 - x) was 0/0 = NaN where x = R^(1/(n-1)) rounds to 1 (a review:
+    R = 1 - 1e-15, n = 1000); against math.fsum of the masses m_1 R^((i-1)/(n-1)), summed here."""
+    for R, n in [(1 - 1e-15, 1000), (0.9999999999999998, 10), (1 - 1e-9, 1000), (0.5, 3)]:
+        want = math.fsum(R ** (i / (n - 1)) for i in range(n))
+        assert rigid.mvg_total_mass(R, n) == pytest.approx(want, rel=1e-14), (R, n)
+        assert np.isfinite(rigid.mvg_efficiency(R, 0.8, n))
+
+
+def test_optimal_pair_ratio_down_to_the_smallest_e():
+    """Eq 23 (corrected) as e -> 0: h(x) = ln(1+x) - ln(1+e) - x ln x/(1+x) = 0 tends to x (1 - ln x) = e;
+    at e = 1e-297 its root, by fixed-point iteration x = e/(1 - ln x) here, is 1.45e-300, inside the
+    bracket; e = 0 (no root in (0, 1)) is refused with a ParameterError, where scipy's brentq failed."""
+    e = 1e-297
+    x = e
+    for _ in range(50):
+        x = e / (1 - math.log(x))
+    assert rigid.optimal_pair_ratio(e) == pytest.approx(x, rel=1e-9)
+    with pytest.raises(ParameterError, match="e = 0.0 is invalid: the continuous-n optimum"):
+        rigid.continuous_optimal_n(0.012, 0.0)
+    assert rigid.mvg_optimal_n(0.012, 0.0) == 2  # the integer search takes e = 0: Eq 20 falls with n
+
+
 # ------------------------------------------------------------------------------------------------
 # Section 5: designs
+
+
+def test_design_functions_take_n_and_m1_by_keyword_only():
+    """mvg_design(R, e, n, m1) and met_design(R, e, m1, n) took n and m1 positionally in opposite orders
+    (a review: met_design(0.012, 0.8, 6) silently made the ten-mass stack with m_1 = 6); both are
+    keyword-only now. MET with a given n needs no R: Eq 25's ratios follow from e alone (n = 10, e = 0.8:
+    R_10 = 0.0118435, docs/references.md's Figs 16-17 stack)."""
+    with pytest.raises(TypeError):
+        rigid.met_design(0.012, 0.8, 6)
+    with pytest.raises(TypeError):
+        rigid.mvg_design(0.012, 0.8, 6)
+    d = rigid.met_design(None, 0.8, n=10, m1=8.4)
+    assert d.n == 10 and d.masses[0] == 8.4
+    assert d.mass_ratio == pytest.approx(np.prod(_met_ratios_eq25(0.8, 10)), rel=1e-13)
+    assert rigid.mvg_design(0.012, 0.8, n=6, m1=8.4).masses[-1] == pytest.approx(8.4 * 0.012, rel=1e-13)
 
 
 def test_design_R_0012_e_08():
