@@ -10,6 +10,7 @@ import abc
 from typing import ClassVar
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike
@@ -43,6 +44,17 @@ class AbstractContactLaw(eqx.Module):
     gradient_note: ClassVar[str | None] = None
     #: derivatives through this law are refused (`ParameterError` when traced; the note says why)
     gradient_refused: ClassVar[bool] = False
+    #: the constructor's checks, per field: `(lowest, strict, what)`: finite and `> lowest` (`strict`) or
+    #: `>= lowest`; checked by `__check_init__` wherever the value is concrete (a traced value, under
+    #: `jit`, `vmap` or `grad`, cannot be: the solve reports what it does instead)
+    field_rules: ClassVar[dict[str, tuple[float, bool, str]]] = {}
+
+    def __check_init__(self):
+        """The law's own numbers, as built by its constructor (not only by `make_law`): a review found
+        `Hertz(-1e9)` ran to "no contact" with NaN launch velocities, `Hertz(nan)` to 65,536 steps and
+        "raise max_steps", and `Tsuji(1e9, -0.5, 1.0)` created energy (e = 1.57)."""
+        for field, (lowest, strict, what) in self.field_rules.items():
+            _check_field(field, getattr(self, field), lowest, strict, what, type(self).__name__)
 
     @abc.abstractmethod
     def elastic_force(self, delta: ArrayLike) -> Array:
@@ -99,6 +111,20 @@ class AbstractContactLaw(eqx.Module):
         Returns a float, or a NumPy array broadcast over the law's parameters and the velocity.
         """
         raise NotImplementedError  # pragma: no cover
+
+
+def _check_field(field: str, value, lowest: float, strict: bool, what: str, law: str) -> None:
+    """`ParameterError` unless every entry of a concrete `value` is finite and `> lowest` (`strict`) or
+    `>= lowest`; a traced value passes (its numbers are not known here)."""
+    if isinstance(value, jax.core.Tracer):
+        return
+    a = np.asarray(value, dtype=float)
+    ok = np.isfinite(a) & ((a > lowest) if strict else (a >= lowest))
+    if not np.all(ok):
+        bad = a if a.ndim == 0 else a[~ok].ravel()[0]
+        where = "" if a.ndim == 0 else f" (an entry of {field}, shape {a.shape})"
+        raise ParameterError(field, float(bad), f"{law}'s {what} must be finite and {'>' if strict else '>='} "
+                             f"{lowest:g}{where}")
 
 
 def _scalar(a):

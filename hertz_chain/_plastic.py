@@ -130,6 +130,7 @@ class Thornton(_ElasticPlastic):
     radius ``R`` instead. The force is never tensile (``clamp`` has no effect; kept for the common API).
     """
 
+    field_rules: ClassVar[dict] = {"k": (0.0, True, "stiffness k"), "delta_y": (0.0, True, "yield overlap delta_y")}
     name: ClassVar[str] = "thornton"
     has_memory: ClassVar[bool] = True
     k: Array
@@ -221,14 +222,23 @@ class JacksonGreen(_ElasticPlastic):
       (4 E' a*)``; below ``w* = 1.9``, ``R_r = R`` and ``delta_r = 0`` (elastic).
 
     **Arguments:** ``k`` (N/m^1.5), ``radius`` R* (m), ``yield_strength`` S_y (Pa), ``poisson_ratio`` nu (for
-    ``C``; 0.3 when unknown), ``switch`` (``w*`` where the force joins the fit; `from_config` computes
-    it). Applied to two curved bodies with their effective ``E*`` and ``R*``, the usual approximation.
+    ``C``; 0.3 when unknown), ``switch`` (``w*`` where the force joins the fit; by default computed, as
+    `from_config` does, where every parameter is one concrete number; else 1.9, where the fit starts,
+    0.5 % above Hertz: pass it where the parameters are arrays or traced). Applied to two curved bodies with their effective ``E*`` and ``R*``, the usual approximation.
     """
 
+    field_rules: ClassVar[dict] = {
+        "k": (0.0, True, "stiffness k"),
+        "radius": (0.0, True, "radius"),
+        "yield_strength": (0.0, True, "yield strength"),
+        "poisson_ratio": (-1.0, True, "Poisson ratio"),
+        "switch": (1.9, False, "switch w*"),
+    }
     name: ClassVar[str] = "jackson-green"
     gradient_note: ClassVar[str | None] = (
-        "its loading curve jumps by 0.5 % at w* = switch (1.9: where the published fit starts), which the "
-        "replayed derivatives do not treat: measured from 2e-4 relative off central differences (three "
+        "its loading curve changes form at w* = 1.9 (where the published fit's contact radius starts) and at "
+        "w* = switch (about 2.006, where the force joins the fit: continuous, with a kink in its slope), which "
+        "the replayed derivatives do not treat: measured from 2e-4 relative off central differences (three "
         "masses, no gravity) to a factor of 5,000 (three masses, 1 mm gaps, gravity)")
     gradient_refused: ClassVar[bool] = True
     k: Array
@@ -238,13 +248,24 @@ class JacksonGreen(_ElasticPlastic):
     switch: Array
     clamp: bool = eqx.field(static=True, default=True)
 
-    def __init__(self, k, radius, yield_strength, poisson_ratio=0.3, switch=1.9, clamp: bool = True):
+    def __init__(self, k, radius, yield_strength, poisson_ratio=0.3, switch=None, clamp: bool = True):
         self.k = jnp.asarray(k, dtype=float)
         self.radius = jnp.asarray(radius, dtype=float)
         self.yield_strength = jnp.asarray(yield_strength, dtype=float)
         self.poisson_ratio = jnp.asarray(poisson_ratio, dtype=float)
-        self.switch = jnp.asarray(switch, dtype=float)
+        self.switch = jnp.asarray(1.9 if switch is None else switch, dtype=float)
         self.clamp = clamp
+        if switch is None and self._concrete_scalars():
+            # a review: the constructor's default was 1.9, where the fit lies 0.47 % above Hertz (a jump of
+            # the loading force that `make_law` avoids); now the same continuous switch as `from_config`
+            found = self._find_switch()
+            if found is not None:
+                self.switch = jnp.asarray(found, dtype=float)
+
+    def _concrete_scalars(self) -> bool:
+        """Whether every parameter is one concrete number (`_find_switch` calls scipy on floats)."""
+        leaves = (self.k, self.radius, self.yield_strength, self.poisson_ratio)
+        return all(not isinstance(x, jax.core.Tracer) and np.ndim(x) == 0 for x in leaves)
 
     @classmethod
     def from_config(cls, k, *, restitution=None, damping=None, effective_mass=None, calibration_velocity=None,

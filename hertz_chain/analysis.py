@@ -319,6 +319,10 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     the pulses, the SRS and the regime. `warnings` lists, one line each: an energy audit above 1e-6,
     a measured restitution outside [0, 1], a measured e more than 1 % from the nominal e in an
     independent cascade, tolerances looser than 1e-6.
+
+    **Raises:** `ParameterError` for the arguments above or a solution without steps; `SolverError` (its
+    `.status` the run's) for a run that failed before its first step (a batch's design whose numbers were
+    invalid): there is nothing to analyse.
     """
     sol = solution
     stack = sol.stack
@@ -328,6 +332,9 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     if st is None:
         raise ParameterError("solution", "a design without step history",
                              "a Solution with steps (simulate, or simulate_batch with save_steps=True)")
+    if np.size(st.t) == 0:  # a batch's design that failed before a step (a review: numpy's "zero-size
+        # array to reduction operation maximum")
+        raise sol.status.error("the run", "there is no step to analyse")
     m = np.asarray(stack.masses, dtype=float)
     n, ground, g = m.size, bool(stack.ground), float(stack.gravity)
     interfaces = list(range(0 if ground else 1, n))

@@ -84,6 +84,7 @@ class Hertz(_HertzianElastic):
     **Arguments:** ``k``, stiffness in N/m^1.5.
     """
 
+    field_rules: ClassVar[dict] = {"k": (0.0, True, "stiffness k")}
     name: ClassVar[str] = "hertz"
     k: Array
     clamp: bool = eqx.field(static=True, default=True)
@@ -129,6 +130,7 @@ class HuntCrossley(_HertzianElastic):
     stack, where the interface is also driven by its neighbours, the clamp can still act.
     """
 
+    field_rules: ClassVar[dict] = {"k": (0.0, True, "stiffness k"), "alpha": (0.0, False, "damping alpha")}
     name: ClassVar[str] = "hunt-crossley"
     k: Array
     alpha: Array
@@ -193,6 +195,11 @@ class Tsuji(_HertzianElastic):
     or not; see `hertz_chain.calibration`.)
     """
 
+    field_rules: ClassVar[dict] = {
+        "k": (0.0, True, "stiffness k"),
+        "eta": (0.0, False, "damping eta"),
+        "m_eff": (0.0, True, "effective mass m_eff"),
+    }
     name: ClassVar[str] = "tsuji"
     k: Array
     eta: Array
@@ -254,6 +261,7 @@ class KelvinVoigt(AbstractContactLaw):
     calibrates ``zeta`` numerically. Its restitution does not depend on the impact velocity.
     """
 
+    field_rules: ClassVar[dict] = {"k": (0.0, True, "stiffness k"), "c": (0.0, False, "damping c")}
     name: ClassVar[str] = "kelvin-voigt"
     k: Array
     c: Array
@@ -341,6 +349,7 @@ class Viscoelastic(_SpeedAndMassCalibrated):
     is computed numerically (`hertz_chain.calibration.viscoelastic_restitution`).
     """
 
+    field_rules: ClassVar[dict] = {"k": (0.0, True, "stiffness k"), "A": (0.0, False, "damping time A")}
     name: ClassVar[str] = "viscoelastic"
     k: Array
     A: Array
@@ -402,6 +411,7 @@ class HertzDashpot(_SpeedAndMassCalibrated):
     viscoelastic law). ``from_restitution`` calibrates ``gamma`` at one speed.
     """
 
+    field_rules: ClassVar[dict] = {"k": (0.0, True, "stiffness k"), "gamma": (0.0, False, "damping gamma")}
     name: ClassVar[str] = "hertz-dashpot"
     k: Array
     gamma: Array
@@ -453,6 +463,11 @@ class PowerLaw(AbstractContactLaw):
     (`calibration.restitution_from_chi`), so ``from_config`` calibrates ``alpha = chi(e) / v_c`` exactly.
     """
 
+    field_rules: ClassVar[dict] = {
+        "k": (0.0, True, "stiffness k"),
+        "p": (1.0, False, "exponent p"),
+        "alpha": (0.0, False, "damping alpha"),
+    }
     name: ClassVar[str] = "power"
     k: Array
     p: Array

@@ -353,13 +353,12 @@ def stack_gain(masses, restitution, ground_restitution=None):
     """
     m = _masses(masses, minimum=1)
     n = m.shape[-1]
-    e_all = _arr(restitution)
-    if ground_restitution is None:
-        e0 = e_all if e_all.ndim == 0 else e_all[..., 0]
-    else:
-        e0 = ground_restitution
-    e0 = _check_ground_e(e0)
+    e_all = _arr(restitution, "restitution")
     e = _check_e(_interface_array(restitution, n, "restitution"), "restitution")
+    if ground_restitution is None:  # entry 0 of `restitution` (its check names `restitution`, as given)
+        e0 = _check_ground_e(e_all if e_all.ndim == 0 else e_all[..., 0], "restitution")
+    else:
+        e0 = _check_ground_e(ground_restitution)
     r = m[..., 1:] / m[..., :-1]
     return (1 + e0) * np.prod((1 + e) / (1 + r), axis=-1) - 1
 

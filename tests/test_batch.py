@@ -132,6 +132,10 @@ def test_designs_past_the_checks_fail_without_being_solved(save_steps):
     for i, r in ((0, 0.3), (4, 0.6)):
         assert b.launch_velocities[i, -1] == pytest.approx(2 * (2 / (1 + r)) - 1, rel=1e-8)
     assert np.asarray(b.stack.masses)[1, 1] == -0.5  # the designs as given
+    if save_steps:  # analysing such a design: one SolverError with its status (was numpy's "zero-size array")
+        with pytest.raises(SolverError, match="ended failed: .*there is no step to analyse") as info:
+            analyse(b.design(1))
+        assert info.value.status == Status.FAILED
     # a batch of nothing but such designs is not solved either (it ran to max_steps)
     none = simulate_batch(jax.tree.map(lambda a: a[1:4], stacks), jax.tree.map(lambda a: a[1:4], states),
                           tolerances=TIGHT, save_steps=save_steps)

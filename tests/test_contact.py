@@ -288,3 +288,41 @@ def test_make_law_under_a_trace_says_so(name, kwargs, param):
     with pytest.raises(ParameterError, match=rf"{param} = 'a traced value'.*construct the law class"):
         jax.grad(lambda v: make_law(name, **kwargs(v)).force(jnp.asarray(1e-4), jnp.asarray(0.0)))(0.8)
     assert jax.grad(lambda k: hc.Hertz(k).force(jnp.asarray(1e-4), jnp.asarray(0.0)))(1e9) == pytest.approx(1e-6, rel=1e-12)
+
+
+@pytest.mark.parametrize("build, field", [
+    (lambda: Hertz(-1e9), "k"),
+    (lambda: Hertz(math.nan), "k"),
+    (lambda: Hertz(np.array([1e9, 0.0])), "k"),
+    (lambda: HuntCrossley(1e9, -0.1), "alpha"),
+    (lambda: Tsuji(1e9, -0.5, 1.0), "eta"),
+    (lambda: Tsuji(1e9, 0.5, 0.0), "m_eff"),
+    (lambda: KelvinVoigt(1e6, -1.0), "c"),
+    (lambda: Viscoelastic(1e9, math.inf), "A"),
+    (lambda: HertzDashpot(1e9, -2.0), "gamma"),
+    (lambda: PowerLaw(1e9, 0.5), "p"),
+    (lambda: hc.Thornton(1e9, -1e-6), "delta_y"),
+    (lambda: hc.JacksonGreen(2e10, 0.005, -1e9), "yield_strength"),
+])
+def test_law_constructors_check_their_numbers(build, field):
+    """The classes themselves, not only `make_law` (a review: `Hertz(-1e9)` ran to "no contact" with NaN
+    launch velocities, `Hertz(nan)` to 65,536 steps and "raise max_steps", `Tsuji(1e9, -0.5, 1.0)`
+    created energy): one ParameterError naming the argument. Traced values are not checked (their
+    numbers are unknown), so a law built under `jit` or `vmap` still traces."""
+    with pytest.raises(ParameterError, match=rf"^{field} = .* is invalid: .*must be finite and >") as info:
+        build()
+    assert "\n" not in str(info.value)
+    assert float(jax.jit(lambda k: Hertz(k).elastic_force(1e-6))(-1.0)) == pytest.approx(-1e-9, rel=1e-12)
+
+
+def test_jackson_green_built_directly_has_make_laws_continuous_switch():
+    """`JacksonGreen(k, R, S_y)` took `switch = 1.9`, where the published fit starts 0.5 % above Hertz (a
+    jump of the loading force); now the switch of `make_law`, where the fit meets Hertz: the loading force
+    just above it equals Hertz's k delta^(3/2), written out here, to 1e-9."""
+    law = hc.JacksonGreen(2e10, 0.005, 1e9)
+    ref = hc.make_law("jackson-green", stiffness=2e10, yield_strength=1e9, effective_radius=0.005)
+    assert float(law.switch) == pytest.approx(float(ref.switch), rel=1e-14) and float(law.switch) > 1.9
+    _, _, w_c, _ = (float(x) for x in law._scales())
+    d = float(law.switch) * w_c * (1 + 1e-12)
+    assert float(law.loading_force(d)) == pytest.approx(2e10 * d**1.5, rel=1e-9)
+    assert float(hc.JacksonGreen(2e10, 0.005, 1e9, switch=1.9).switch) == 1.9  # as given
