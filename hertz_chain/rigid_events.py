@@ -85,6 +85,8 @@ class RigidResult:
       that last impact (0 for a mass that never collides).
     * `final_gaps` `(n,)`: `gaps[0]` = height of mass 1 above the ground (NaN without a ground), `gaps[j]`
       the gap between masses `j` and `j+1`, at `final_time`.
+    * `gain` (property): the top's launch velocity over mass 1's initial speed (Eq 19's `G_n` for a
+      gapped stack at g = 0; see the property).
     """
 
     collisions: np.ndarray

@@ -573,13 +573,14 @@ def _launch_impl(stack, state, t_max, cfg, replay):
 
 
 _NOT_ENDED = ("hertz_chain.launch_velocity: the cascade did not end (t_max or max_steps reached, no contact, "
-              "or a non-finite state); raise t_max or max_steps, or check the design")
+              "or a non-finite state); raise t_max or max_steps, or check the design (masses > 0 and the laws' "
+              "parameters: traced, they are not checked before the solve)")
 
 
 _LAST_ENDED = int(Status.COMPLETE_WITH_REBOUNDS)
 
 
-def _checked(v, status, replay=False):
+def _checked(v, status, replay=False, traced=False):
     """`v`, or an error where the solve did not end: `SolverError` when called on arrays, a run-time
     error of the caller's compiled function under a trace (`eqx.error_if`). Kept out of `_launch_jit`:
     a host callback would keep the compiled solve out of JAX's persistent compilation cache.
@@ -593,8 +594,12 @@ def _checked(v, status, replay=False):
         if np.asarray(status).max() > _LAST_ENDED:  # 2 us; np.any(... > Status.X) took 10 us per call
             # the cause, by the worst status (a review: the generic words suggested max_steps for a t_max)
             worst = Status(int(np.asarray(status).max()))
+            # traced: a design under the caller's grad or vmap, whose masses and laws no check could read (a
+            # review: a negative mass under jax.grad read only "raise max_steps")
             raise SolverError(f"hertz_chain.launch_velocity: the cascade did not end ({worst.text}): "
-                              + worst.hint().replace("solver.", ""))
+                              + worst.hint().replace("solver.", "")
+                              + ("; the design's numbers were traced (jax.grad, jax.vmap), so the checks of "
+                                 "masses > 0 and the laws' parameters could not run: check them too" if traced else ""))
         return v
     bad = status > _LAST_ENDED
     return _guard_reverse(v, bad) if replay == "reverse" else _guard_forward(v, bad)
@@ -704,7 +709,7 @@ def launch_velocity(
                                  "(jax.jacfwd, jax.jvp); 'reverse' (the default) serves jax.grad, jax.vjp and "
                                  "jax.jacrev") from None
         raise
-    return _checked(*out, replay)
+    return _checked(*out, replay, traced=True)
 
 
 # `launch_velocity`'s solves at the top level, by its options as written and the structure of its

@@ -210,6 +210,7 @@ class Stack(eqx.Module):
                 raise ParameterError(
                     "laws", f"{len(laws)} laws", f"one law per interface: {len(interfaces)} for n = {n}"
                     f" {'with' if ground else 'without'} the ground"
+                    + ("" if ground or len(laws) != n else " (or n with None first, where the ground would be)")
                 )
             stacked, groups = _group_laws(laws, interfaces)
         self.masses = masses
