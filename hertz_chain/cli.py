@@ -742,6 +742,25 @@ def _usage_error(exc) -> str:
     return message
 
 
+def _refuse_repeated_options(args: list[str]) -> None:
+    """Exit 2 where an option that takes one value is given twice (`--output a.nc --output b.csv`: click
+    keeps the last without a word, and a review found only `b.csv` written). Repeatable options
+    (`--set`) and flags pass."""
+    words = [str(a).split("=", 1)[0] for a in args if str(a).startswith("-")]
+    if len(words) < 2:  # (the command tree costs ~8 ms; a short and a long name may be one option)
+        return
+    group = typer.main.get_command(app)
+    name = next((str(a) for a in args if not str(a).startswith("-")), None)
+    command = getattr(group, "commands", {}).get(name)
+    for param in getattr(command, "params", ()):  # (typer's own click: its classes are not click's)
+        if getattr(param, "param_type_name", "") == "option" and not (
+                param.multiple or getattr(param, "is_flag", False) or getattr(param, "count", False)):
+            names = set(param.opts) | set(param.secondary_opts)
+            given = sum(w in names for w in words)
+            if given > 1:
+                _fail(f"{param.opts[0]} given {given} times: it takes one value (give it once)")
+
+
 def main(argv: list[str] | None = None) -> None:
     """Console-script entry point. Exits with the status of the module docstring's table."""
     # Equinox's run-time checks (diffrax's sign check of `dt0` against the traced `t1`) are host
@@ -752,6 +771,7 @@ def main(argv: list[str] | None = None) -> None:
     # `hertz_chain._export` keeps the traced solve on disk too (`jax.export`; 3.4 s -> 2.6 s).
     os.environ.setdefault("EQX_ON_ERROR", "nan")
     try:
+        _refuse_repeated_options(sys.argv[1:] if argv is None else list(argv))
         code = app(args=argv, prog_name="hertz-chain", standalone_mode=False)
     except HertzChainError as exc:  # safety net: never a traceback for a user error
         typer.echo(f"hertz-chain: error: {_one_line(exc)}", err=True)

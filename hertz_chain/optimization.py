@@ -202,6 +202,8 @@ def parse_optimize(raw: Any, spec: StackSpec) -> OptimizeSpec:
         for key in ("radius", "material", "shape"):
             if isinstance(getattr(spec.stack, key), tuple):
                 raise _err("optimize.n", f"stack.{key} is given per mass; with optimize.n give one value for all")
+        if isinstance(spec.stack.gaps, tuple):  # a review: numpy's "stack.gaps has 2 entries, expected 3"
+            raise _err("optimize.n", "stack.gaps is given per gap; with optimize.n give one gap for all")
         if spec.stack.velocities is not None:
             raise _err("optimize.n", "a chain started from stack.velocities has a fixed number of masses")
         if spec.contact.overrides:
@@ -285,8 +287,9 @@ def read_optimize_file(path: str | Path) -> tuple[StackSpec, OptimizeSpec, dict]
     raw = doc.pop("optimize")
     try:
         problem = parse_optimize(raw, spec)
-    except StackFileError as exc:
-        raise StackFileError(f"{path}: {exc}") from None
+    except StackFileError as exc:  # (once: a message from building the stack may name the file already)
+        text = str(exc)
+        raise StackFileError(text if text.startswith(f"{path}: ") else f"{path}: {text}") from None
     return spec, problem, doc
 
 
@@ -1058,8 +1061,9 @@ def prepare(path: str | Path):
     ns = problem.n or (len(design_masses(spec)),)
     try:
         return spec, problem, [_space(spec, doc, problem, n) for n in ns]
-    except StackFileError as exc:
-        raise StackFileError(f"{path}: {exc}") from None
+    except StackFileError as exc:  # (once: a message from building the stack may name the file already)
+        text = str(exc)
+        raise StackFileError(text if text.startswith(f"{path}: ") else f"{path}: {text}") from None
 
 
 def optimize(path: str | Path) -> OptimizeResult:

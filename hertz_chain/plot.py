@@ -27,7 +27,9 @@ def report_figure(report: Report):
     ax = axes[0, 0]
     for i in range(n):
         ax.plot(t_ms, st.velocities[:, i], label=f"mass {i + 1}")
-    vertical = report.ground and float(report.solution.stack.gravity) > 0  # else "up" is away from mass 1
+    # with the ground, > 0 is upward (away from it) with or without gravity (a review: a gapped stack at g = 0
+    # read "> 0 away from mass 1"); a chain without the ground has no up: away from mass 1
+    vertical = report.ground
     ax.set(xlabel="time (ms)", ylabel=f"velocity (m/s, {'upward' if vertical else '> 0 away from mass 1'})",
            title="Velocities")
     ax.legend(fontsize="small", ncol=2)
@@ -51,9 +53,12 @@ def report_figure(report: Report):
     else:
         ax.plot(t_ms, a_g, color="C3")
         ax.set_title("Top-mass acceleration")
-    ax.set(xlabel="time (ms)", ylabel="acceleration (g)")
+    ax.set(xlabel="time (ms)", ylabel="accelerometer a + g (g)")
     ax = axes[1, 1]
     srs = report.top_srs
+    if srs is None:  # a review: an empty panel without a word (a partial run's top mass had no pulse)
+        ax.text(0.5, 0.5, "no SRS: the top mass has no complete pulse", transform=ax.transAxes, ha="center",
+                va="center", color="0.4")
     if srs is not None:
         ax.loglog(srs.frequencies_Hz, srs.maximax, label={"abs": "maximax", "pos": "positive", "neg": "negative"}.get(
             getattr(srs, "peak", "abs"), "maximax"))
@@ -66,20 +71,26 @@ def report_figure(report: Report):
            ylabel="pseudo-velocity (m/s)" if pv else "peak absolute acceleration (g)")
     # the primary cascade: up to a little after the top mass's last contact (a chain held by an end force or
     # a far wall never flies apart: its whole record, the wall's contact included)
+    # (every contact of the first cascade, not only the top's: a review saw a touching stack's ground force
+    # still at 4 kN at the right edge)
     top_eps = [ep for ep in report.episodes if ep.interface == n - 1]
     if top_eps and not report.solution.stack.held:
-        t_end = 1e3 * max(ep.end for ep in top_eps) * 1.15
+        t_end = 1e3 * max(ep.end for ep in report.episodes) * 1.15
         for ax in axes[0]:
             ax.set_xlim(0.0, t_end)
     for a in axes.flat:
         a.grid(True, which="both" if a.get_xscale() == "log" else "major", alpha=0.4)
+    gain = report.top_velocity_gain
+    shown = f"{gain:.4f}" if np.isfinite(gain) else "— (no launch)"
     if report.solution.stack.held:  # an end force or a far wall: no launch, no rigid cascade
-        fig.suptitle(f"Held chain: top velocity at t_max / striker speed {report.top_velocity_gain:.4f}, "
-                     f"regime: {report.regime}")
+        title = f"Held chain: top velocity at t_max / striker speed {shown}, regime: {report.regime}"
     else:
-        fig.suptitle(f"Top launch gain {report.top_velocity_gain:.4f} (rigid theory: "
-                     f"{'—' if report.rigid.nominal_gain is None else format(report.rigid.nominal_gain, '.4f')}), "
-                     f"regime: {report.regime}")
+        title = (f"Top launch gain {shown} (rigid theory: "
+                 f"{'—' if report.rigid.nominal_gain is None else format(report.rigid.nominal_gain, '.4f')}), "
+                 f"regime: {report.regime}")
+    if not report.status.ok:  # a review: a cut-short run's figure looked finished ("gain nan")
+        title = f"PARTIAL RESULTS ({report.status.text})\n{title}"
+    fig.suptitle(title, color="C3" if not report.status.ok else "black")
     return fig
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+import shlex
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -280,9 +281,19 @@ def _metadata(meta: dict | None) -> dict:
 
     meta = dict(meta or {})
     now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    command = " ".join(["hertz-chain", *sys.argv[1:]]) if sys.argv and "hertz-chain" in sys.argv[0] else "hertz_chain"
+    # shlex.join: a review found `--set solver.t_max="10 ms"` recorded as `--set solver.t_max=10 ms`, which
+    # does not run again
+    command = (shlex.join(["hertz-chain", *sys.argv[1:]]) if sys.argv and "hertz-chain" in sys.argv[0]
+               else "hertz_chain")
     return {"title": meta.get("title") or "hertz_chain simulation", "source_file": meta.get("source_file") or "",
             "version": f"hertz_chain {__version__}", "history": f"{now} {command}"}
+
+
+def _one_line(text: str) -> str:
+    """A value for a one-line header (the CSV's `#` lines): line breaks as the two characters `\\n`, so that
+    a title or file name with a newline cannot end the comment (a review: the second line of a title was
+    read as the CSV's header)."""
+    return str(text).replace("\r\n", "\\n").replace("\n", "\\n").replace("\r", "\\n")
 
 
 _ACC_G = "in units of standard gravity g0 = 9.80665 m s-2"
@@ -343,10 +354,13 @@ def to_dataset(report: Report, meta: dict | None = None):
     data["peak_force_time"] = (("interface",),
                                [strongest[j].peak_force_time if j in strongest else np.nan for j in range(n)],
                                {"units": "s", "long_name": "time of that peak (parabola through the samples)"})
-    pulse_fields = (("pulse_peak_g", "peak_g", "1", f"peak of the mass's main pulse {_ACC_G}"),
+    pulse_fields = (("pulse_peak_g", "peak_g", "1", f"peak of the mass's main pulse {_ACC_G} (refined between "
+                     "the solver's samples: up to ~1e-4 above the saved series' maximum)"),
                     ("pulse_duration", "duration_10", "s", "width of the main pulse between its 10 % points"),
                     ("pulse_rise_time", "rise_time", "s", "10 % to 90 % rise time of the main pulse"),
-                    ("pulse_delta_v", "delta_v_main", "m s-1", "velocity change over the main pulse"),
+                    ("pulse_delta_v", "delta_v_main", "m s-1", "velocity change the accelerometer records over "
+                     "the main pulse: the integral of a + g (under gravity more than the mass's own change by g "
+                     "times the pulse's length)"),
                     ("pulse_half_sine_duration", "equivalent_half_sine_duration", "s",
                      "duration of the half-sine with the same peak and velocity change"))
     for name, field, unit, long in pulse_fields:  # every mass's main pulse; NaN for a mass without contact
@@ -373,6 +387,9 @@ def to_dataset(report: Report, meta: dict | None = None):
     attrs = {k: (int(v) if isinstance(v, bool) else v) for k, v in to_dict(report).items()
              if isinstance(v, (str, int, float)) and v is not None}
     attrs["rigid_json"] = json.dumps(to_dict(report)["rigid"])
+    # the analysis's warnings (an energy audit, loose tolerances, ...), one per line: the list was dropped
+    # with the other non-scalar entries (a review: a file from a run with a failed audit looked clean)
+    attrs["warnings"] = "\n".join(report.warnings) if report.warnings else "none"
     attrs["hertz_chain_conventions"] = ("SI units; masses numbered from the bottom; interface 0 = ground-mass 1, "
                                         "interface j = mass j - mass j+1")
     attrs["time_sampling"] = sampling
@@ -387,8 +404,19 @@ def write_output(report: Report, path: str | Path, meta: dict | None = None) -> 
     """Write `.nc` (the CF `to_dataset`, compressed) or `.csv` (time, the top mass's accelerometer in
     m/s² and in g, its velocity), the history on the file's uniform grid when it asks for one.
     `meta`: `title` and `source_file` for the provenance. The CSV starts with `#` comment lines: the
-    title, the input file, the version, the date, the units and the sampling."""
+    title, the input file, the version, the date, the run's status (with `PARTIAL RESULTS` where the run
+    did not complete), its warnings, the units and the sampling.
+
+    An existing file at `path` is replaced, as `xarray.Dataset.to_netcdf` does (the command line's
+    `--output` refuses one without `--force`).
+
+    **Raises:** `OutputPathError` for a suffix other than `.nc` or `.csv` (it wrote CSV text into any
+    other name, e.g. `out.json`)."""
     path = Path(path)
+    if path.suffix.lower() not in (".nc", ".csv"):
+        from .errors import OutputPathError
+
+        raise OutputPathError("path", str(path), "a .nc (NetCDF) or .csv file (report.to_json for JSON)")
     if path.suffix.lower() == ".nc":
         ds = to_dataset(report, meta)
         encoding = {name: {"zlib": True, "complevel": 4} for name in ds.data_vars
@@ -405,12 +433,15 @@ def write_output(report: Report, path: str | Path, meta: dict | None = None) -> 
             names, described = names + ",wall_force_N", "; force of the far wall on it (N)"
         table = np.column_stack(columns)
         m = _metadata(meta)
+        status = report.status
         head = [f"{m['title']}", f"input file: {m['source_file'] or '(none)'}", f"written by {m['version']}; {m['history']}",
+                f"status: {status.text}" + ("" if status.ok else f" (PARTIAL RESULTS: {status.hint()})"),
+                *(f"warning: {w}" for w in report.warnings),
                 f"top mass (mass {len(report.masses)}), {model_label(report)} model; time sampling: {sampling}",
                 "columns: time (s); accelerometer a + g (m/s^2); the same in g (9.80665 m/s^2); velocity (m/s, upward)"
                 + described]
         with open(path, "w", encoding="utf-8") as f:
-            f.writelines(f"# {line}\n" for line in head)
+            f.writelines(f"# {_one_line(line)}\n" for line in head)
             f.write(names + "\n")
             np.savetxt(f, table, delimiter=",")
 
@@ -478,16 +509,26 @@ def _end_mass_note(cmp) -> str | None:
 def optimize_table(result) -> str:
     """An `optimize.OptimizeResult` as text: the best stack against the start and the paper's designs,
     the varied values and the convergence."""
+    c = result.convergence
+    budget = c.get("limits", {}).get("total_mass", {}).get("limit")
+    top = float(result.masses[-1])
+
     def row(name, rep, why=None):
         if rep is None:
             return f"  {name:<22} (could not be simulated{': ' + why if why else ''})"
         tp = rep.top_pulse
         pulse = "" if tp is None else f"   peak {tp.peak / G0:9.4g} g, half-sine {tp.equivalent_half_sine_duration * 1e3:.4g} ms"
-        return f"  {name:<22} gain {rep.top_velocity_gain:.6f}{pulse}"
+        # a review: a rigid design over the mass budget, or ending at another top mass (MET), read as a
+        # better stack than the optimum without a word
+        m = np.asarray(rep.masses, dtype=float)
+        unlike = [f"top mass {m[-1]:.4g} kg" if abs(m[-1] - top) > 1e-6 * top else "",
+                  f"{m.sum():.4g} kg, over the {budget:.4g} kg budget" if budget and m.sum() > budget * (1 + 1e-9) else ""]
+        unlike = "; ".join(u for u in unlike if u)
+        return f"  {name:<22} gain {rep.top_velocity_gain:.6f}{pulse}" + (f"   ({unlike})" if unlike else "")
 
-    c = result.convergence
-    lines = [f"Optimised stack ({result.objective}, n = {result.n}): {result.status.text}; "
-             f"objective {result.objective_value:.9g}", "",
+    value = (f"gain {-result.objective_value:.9g}" if result.objective == "gain"
+             else f"objective {result.objective_value:.9g}")
+    lines = [f"Optimised stack ({result.objective}, n = {result.n}): {result.status.text}; {value}", "",
              "masses [kg], bottom first: " + ", ".join(f"{m:.6g}" for m in result.masses), "",
              "varied:"]
     lines += [f"  {k} = {v:.9g}" for k, v in result.variables.items()]
@@ -504,8 +545,9 @@ def optimize_table(result) -> str:
               "  active bounds: " + (", ".join(c["active_bounds"]) or "none")]
     lines += [f"  note: {note}" for note in c.get("start_outside_bounds", ())]
     if c.get("limits"):
-        lines.append("  limits: " + ", ".join(f"{k} {v['limit']:.6g}: {v['value']:.6g} ({v['state']})"
-                                             for k, v in c["limits"].items()))
+        unit = {"total_mass": " kg", "max_peak_g": " g", "max_peak_force": " N"}
+        lines.append("  limits: " + ", ".join(f"{k} {v['limit']:.6g}{unit.get(k, '')}: {v['value']:.6g}{unit.get(k, '')} "
+                                             f"({v['state']})" for k, v in c["limits"].items()))
     if "srs_max_error_db" in c:
         lines.append(f"  SRS: largest miss {c['srs_max_error_db']:.2f} dB "
                      f"({'within' if c['srs_within_tolerance'] else 'outside'} the tolerance band)")

@@ -412,6 +412,11 @@ FLAG_ROWS = [
     ("output_exists", lambda t: ["simulate", "S", "--output", _existing(t)], ["--output", "--force"]),
     ("output_is_folder", lambda t: ["simulate", "S", "--output", t / "d.nc", "--force"], ["--output", "folder"]),
     ("output_same_as_plot", lambda t: ["simulate", "S", "--output", t / "a.png", "--plot", t / "a.png"], ["--"]),
+    # click keeps the last of a repeated option without a word (a review: only b.csv written)
+    ("output_repeated", lambda t: ["simulate", "S", "--output", t / "a.nc", "--output", t / "b.csv"],
+     ["--output given 2 times"]),
+    ("design_restitution_repeated", lambda t: ["design", "-R", "0.1", "-e", "0.8", "--restitution", "0.7"],
+     ["--restitution given 2 times"]),
     ("plot_missing_folder", lambda t: ["simulate", "S", "--plot", t / "no" / "p.png"], ["--plot", "does not exist"]),
     ("plot_parent_is_file", lambda t: ["simulate", "S", "--plot", t / "afile" / "p.png"], ["--plot"]),
     ("plot_jpg", lambda t: ["simulate", "S", "--plot", t / "p.jpg"], ["--plot", ".png"]),

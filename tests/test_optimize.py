@@ -339,6 +339,18 @@ def test_bad_optimize_sections_give_one_line_and_exit_2(tmp_path, capsys, optimi
         assert w in err, (w, err)
 
 
+def test_gaps_per_gap_with_a_list_of_n_are_refused_in_one_line(tmp_path, capsys):
+    """A review: per-gap `stack.gaps` with `optimize.n = [3, 4]` ended in a 63-line traceback ("stack.gaps
+    has 2 entries, expected 3", exit 1); refused like the other per-entry lists."""
+    doc = BASE | {"stack": {"masses": [1.0, 0.3, 0.1], "gaps": [0, "1 mm"]},
+                  "optimize": {"n": [3, 4], "vary": [{"key": "stack.masses", "bounds": ["10 g", "1 kg"]}]}}
+    path = _write(tmp_path, doc)
+    with pytest.raises(StackFileError, match=r"optimize\.n: stack\.gaps is given per gap"):
+        prepare(path)
+    code, out, err = _cli(["optimize", str(path)], capsys)
+    assert code == 2 and err.count("\n") == 1 and "stack.gaps is given per gap" in err
+
+
 def test_write_never_replaces_the_input_or_an_existing_file(tmp_path, capsys):
     path = _write(tmp_path, BASE | {"optimize": {"vary": [{"key": "drop.impact_velocity",
                                                             "bounds": ["1 m/s", "2 m/s"]}]}})
@@ -572,7 +584,7 @@ def test_a_peak_force_limit_stops_the_drop_speed_where_johnson_says(tmp_path):
     assert "NOT MET" in optimize_table(result)
     limit = result.convergence["limits"]["max_peak_force"]  # the limit that keeps the target away, named
     assert limit["state"] == "active" and limit["value"] == pytest.approx(F, rel=1e-3)
-    assert "max_peak_force 3000: " in optimize_table(result)
+    assert "max_peak_force 3000 N: " in optimize_table(result)
     assert "pulse target NOT MET (peak g -69.4 %" in result.document().splitlines()[0]
 
 
