@@ -223,8 +223,10 @@ class JacksonGreen(_ElasticPlastic):
 
     **Arguments:** ``k`` (N/m^1.5), ``radius`` R* (m), ``yield_strength`` S_y (Pa), ``poisson_ratio`` nu (for
     ``C``; 0.3 when unknown), ``switch`` (``w*`` where the force joins the fit; by default computed, as
-    `from_config` does, where every parameter is one concrete number; else 1.9, where the fit starts,
-    0.5 % above Hertz: pass it where the parameters are arrays or traced). Applied to two curved bodies with their effective ``E*`` and ``R*``, the usual approximation.
+    `from_config` does, where every parameter is one number (also a Python number under `jit`); else
+    1.9, where the fit starts, 0.5 % above Hertz: pass it where the parameters are arrays or traced).
+    Raises `ParameterError` where the fit starts below Hertz (no continuous switch; `switch = 1.9`
+    accepts the jump). Applied to two curved bodies with their effective ``E*`` and ``R*``, the usual approximation.
     """
 
     field_rules: ClassVar[dict] = {
@@ -255,17 +257,20 @@ class JacksonGreen(_ElasticPlastic):
         self.poisson_ratio = jnp.asarray(poisson_ratio, dtype=float)
         self.switch = jnp.asarray(1.9 if switch is None else switch, dtype=float)
         self.clamp = clamp
-        if switch is None and self._concrete_scalars():
+        raw = (k, radius, yield_strength, poisson_ratio)
+        if switch is None and all(not isinstance(x, jax.core.Tracer) and np.ndim(x) == 0 for x in raw):
             # a review: the constructor's default was 1.9, where the fit lies 0.47 % above Hertz (a jump of
-            # the loading force that `make_law` avoids); now the same continuous switch as `from_config`
-            found = self._find_switch()
-            if found is not None:
-                self.switch = jnp.asarray(found, dtype=float)
-
-    def _concrete_scalars(self) -> bool:
-        """Whether every parameter is one concrete number (`_find_switch` calls scipy on floats)."""
-        leaves = (self.k, self.radius, self.yield_strength, self.poisson_ratio)
-        return all(not isinstance(x, jax.core.Tracer) and np.ndim(x) == 0 for x in leaves)
+            # the loading force that `make_law` avoids); now the same continuous switch as `from_config`,
+            # also under the caller's jit where the numbers are Python's (`ensure_compile_time_eval`: the
+            # same law inside and outside), after the numbers' own checks
+            with jax.ensure_compile_time_eval():
+                plain = JacksonGreen(*(float(x) for x in raw), switch=1.9, clamp=clamp)  # checked (field_rules)
+                found = plain._find_switch()
+            if found is None:
+                raise ParameterError("yield_strength", float(yield_strength), "a law whose fit meets Hertz above "
+                                     "w* = 1.9 (here it starts below: the loading force would jump, and make_law "
+                                     "refuses it); pass switch = 1.9 to accept the jump, or use thornton")
+            self.switch = jnp.asarray(found, dtype=float)
 
     @classmethod
     def from_config(cls, k, *, restitution=None, damping=None, effective_mass=None, calibration_velocity=None,

@@ -746,7 +746,13 @@ def _refuse_repeated_options(args: list[str]) -> None:
     """Exit 2 where an option that takes one value is given twice (`--output a.nc --output b.csv`: click
     keeps the last without a word, and a review found only `b.csv` written). Repeatable options
     (`--set`) and flags pass."""
-    words = [str(a).split("=", 1)[0] for a in args if str(a).startswith("-")]
+    args = [str(a) for a in args]
+    if "--" in args:  # after it, words are values, not options
+        args = args[: args.index("--")]
+    if any(a in ("--help", "-h") for a in args):  # help wins, as click has it
+        return
+    # `--opt=value` and `-xVALUE` (a short option with its value attached) name the option before the value
+    words = [a.split("=", 1)[0] if a.startswith("--") else a[:2] for a in args if a.startswith("-") and len(a) > 1]
     if len(words) < 2:  # (the command tree costs ~8 ms; a short and a long name may be one option)
         return
     group = typer.main.get_command(app)

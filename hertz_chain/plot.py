@@ -81,7 +81,7 @@ def report_figure(report: Report):
     for a in axes.flat:
         a.grid(True, which="both" if a.get_xscale() == "log" else "major", alpha=0.4)
     gain = report.top_velocity_gain
-    shown = f"{gain:.4f}" if np.isfinite(gain) else "— (no launch)"
+    shown = (f"{gain:.4f}" if np.isfinite(gain) else "— (no launch)") + ("" if report.status.ok else " (not final)")
     if report.solution.stack.held:  # an end force or a far wall: no launch, no rigid cascade
         title = f"Held chain: top velocity at t_max / striker speed {shown}, regime: {report.regime}"
     else:

@@ -285,8 +285,20 @@ def _metadata(meta: dict | None) -> dict:
     # does not run again
     command = (shlex.join(["hertz-chain", *sys.argv[1:]]) if sys.argv and "hertz-chain" in sys.argv[0]
                else "hertz_chain")
-    return {"title": meta.get("title") or "hertz_chain simulation", "source_file": meta.get("source_file") or "",
-            "version": f"hertz_chain {__version__}", "history": f"{now} {command}"}
+    out = {"title": meta.get("title") or "hertz_chain simulation", "source_file": meta.get("source_file") or "",
+           "version": f"hertz_chain {__version__}", "history": f"{now} {command}"}
+    # the input as it was read (a review: a bare file name, no way to tell later which stack a file came
+    # from; the sweep stores already keep theirs): its SHA-256, for a check against a copy
+    source = Path(out["source_file"]) if out["source_file"] else None
+    if source is not None and source.is_file():
+        import hashlib
+
+        try:
+            out["source_file_sha256"] = hashlib.sha256(source.read_bytes()).hexdigest()
+            out["source_file"] = str(source.resolve())
+        except OSError:
+            pass
+    return out
 
 
 def _one_line(text: str) -> str:
@@ -353,7 +365,13 @@ def to_dataset(report: Report, meta: dict | None = None):
                            "(the exported force history's maximum when it is sampled at the steps)"})
     data["peak_force_time"] = (("interface",),
                                [strongest[j].peak_force_time if j in strongest else np.nan for j in range(n)],
-                               {"units": "s", "long_name": "time of that peak (parabola through the samples)"})
+                               {"units": "s", "long_name": "time of the refined peak (parabola through the samples)"})
+    # the value at that time (a review: the file paired the sampled maximum with the refined peak's time;
+    # the JSON's peak_force_refined_N)
+    data["peak_force_refined"] = (("interface",),
+                                  [strongest[j].peak_force_refined if j in strongest else np.nan for j in range(n)],
+                                  {"units": "N", "long_name": "largest contact force in the first cascade, refined "
+                                   "between the solver's steps (parabola through the samples; at peak_force_time)"})
     pulse_fields = (("pulse_peak_g", "peak_g", "1", f"peak of the mass's main pulse {_ACC_G} (refined between "
                      "the solver's samples: up to ~1e-4 above the saved series' maximum)"),
                     ("pulse_duration", "duration_10", "s", "width of the main pulse between its 10 % points"),
@@ -389,7 +407,7 @@ def to_dataset(report: Report, meta: dict | None = None):
     attrs["rigid_json"] = json.dumps(to_dict(report)["rigid"])
     # the analysis's warnings (an energy audit, loose tolerances, ...), one per line: the list was dropped
     # with the other non-scalar entries (a review: a file from a run with a failed audit looked clean)
-    attrs["warnings"] = "\n".join(report.warnings) if report.warnings else "none"
+    attrs["warnings"] = "\n".join(report.warnings)  # "" when there are none
     attrs["hertz_chain_conventions"] = ("SI units; masses numbered from the bottom; interface 0 = ground-mass 1, "
                                         "interface j = mass j - mass j+1")
     attrs["time_sampling"] = sampling
@@ -434,7 +452,8 @@ def write_output(report: Report, path: str | Path, meta: dict | None = None) -> 
         table = np.column_stack(columns)
         m = _metadata(meta)
         status = report.status
-        head = [f"{m['title']}", f"input file: {m['source_file'] or '(none)'}", f"written by {m['version']}; {m['history']}",
+        head = [f"{m['title']}", f"input file: {m['source_file'] or '(none)'}"
+                + (f" (sha256 {m['source_file_sha256']})" if m.get("source_file_sha256") else ""), f"written by {m['version']}; {m['history']}",
                 f"status: {status.text}" + ("" if status.ok else f" (PARTIAL RESULTS: {status.hint()})"),
                 *(f"warning: {w}" for w in report.warnings),
                 f"top mass (mass {len(report.masses)}), {model_label(report)} model; time sampling: {sampling}",

@@ -93,15 +93,14 @@ MAX_ARRAY_MASSES = 1_000_000
 def _arr(x, name: str = "value") -> np.ndarray:
     """`x` as a float array, or a `ParameterError` naming `name` (text, lists of text, `None`, ragged
     lists: numpy's own ValueError/TypeError did not say which argument)."""
-    a = x if isinstance(x, np.ndarray) else None
+    # text is refused (numpy turns "0.012" into 0.012); anything numpy makes a float of passes: fractions,
+    # decimals, None (NaN) in an unused entry such as a ground restitution's, as before (a review)
     try:
-        a = np.asarray(x)
-        if a.dtype.kind not in "iuf":
+        if isinstance(x, (str, bytes)) or np.asarray(x).dtype.kind in "USV":
             raise TypeError
-        return a.astype(float)
+        return np.asarray(x, dtype=float)
     except (TypeError, ValueError):
-        shown = x if a is None or a.dtype.kind not in "iufb" else _show(a)
-        raise ParameterError(name, shown, "a real number (or an array of real numbers)") from None
+        raise ParameterError(name, x, "a real number (or an array of real numbers)") from None
 
 
 def _scalar(x, name: str) -> float:

@@ -580,7 +580,7 @@ _NOT_ENDED = ("hertz_chain.launch_velocity: the cascade did not end (t_max or ma
 _LAST_ENDED = int(Status.COMPLETE_WITH_REBOUNDS)
 
 
-def _checked(v, status, replay=False, traced=False):
+def _checked(v, status, replay=False, design=None):
     """`v`, or an error where the solve did not end: `SolverError` when called on arrays, a run-time
     error of the caller's compiled function under a trace (`eqx.error_if`). Kept out of `_launch_jit`:
     a host callback would keep the compiled solve out of JAX's persistent compilation cache.
@@ -596,6 +596,7 @@ def _checked(v, status, replay=False, traced=False):
             worst = Status(int(np.asarray(status).max()))
             # traced: a design under the caller's grad or vmap, whose masses and laws no check could read (a
             # review: a negative mass under jax.grad read only "raise max_steps")
+            traced = design is not None and any(isinstance(x, jax.core.Tracer) for x in jax.tree.leaves(design))
             raise SolverError(f"hertz_chain.launch_velocity: the cascade did not end ({worst.text}): "
                               + worst.hint().replace("solver.", "")
                               + ("; the design's numbers were traced (jax.grad, jax.vmap), so the checks of "
@@ -709,7 +710,7 @@ def launch_velocity(
                                  "(jax.jacfwd, jax.jvp); 'reverse' (the default) serves jax.grad, jax.vjp and "
                                  "jax.jacrev") from None
         raise
-    return _checked(*out, replay, traced=True)
+    return _checked(*out, replay, design=(stack, state))
 
 
 # `launch_velocity`'s solves at the top level, by its options as written and the structure of its

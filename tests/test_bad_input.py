@@ -417,6 +417,8 @@ FLAG_ROWS = [
      ["--output given 2 times"]),
     ("design_restitution_repeated", lambda t: ["design", "-R", "0.1", "-e", "0.8", "--restitution", "0.7"],
      ["--restitution given 2 times"]),
+    ("design_restitution_repeated_attached", lambda t: ["design", "-R", "0.1", "-e0.8", "-e0.7"],
+     ["--restitution given 2 times"]),
     ("plot_missing_folder", lambda t: ["simulate", "S", "--plot", t / "no" / "p.png"], ["--plot", "does not exist"]),
     ("plot_parent_is_file", lambda t: ["simulate", "S", "--plot", t / "afile" / "p.png"], ["--plot"]),
     ("plot_jpg", lambda t: ["simulate", "S", "--plot", t / "p.jpg"], ["--plot", ".png"]),

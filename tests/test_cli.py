@@ -219,3 +219,17 @@ def test_progress_lines_only_when_asked_off_a_terminal(monkeypatch):
     monkeypatch.setenv("HERTZ_CHAIN_PROGRESS_DELAY", "abc")  # a malformed setting never stops a run
     odd = runner.invoke(app, ["simulate", str(NORMATIVE), "--json"])
     assert odd.exit_code == 0 and odd.exception is None
+
+
+def test_options_given_twice_are_refused_only_where_they_take_one_value():
+    """`_refuse_repeated_options`: a single-value option given twice exits 2 (the test_bad_input rows); these
+    pass untouched to click: a repeatable `--set`, a word after `--`, `--help` (help wins), a negative value."""
+    import typer
+
+    from hertz_chain.cli import _refuse_repeated_options
+
+    for argv in (["simulate", "f.toml", "--set", "a=1", "--set", "b=2"], ["simulate", "f.toml", "-o", "a.nc", "--", "-o"],
+                 ["design", "-R", "0.012", "-e", "0.8", "-R", "0.1", "--help"], ["design", "-R", "-0.1", "-e", "-0.1"]):
+        _refuse_repeated_options(argv)
+    with pytest.raises(typer.Exit):
+        _refuse_repeated_options(["design", "-R", "0.012", "-e0.8", "-e0.7"])

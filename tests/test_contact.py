@@ -326,3 +326,11 @@ def test_jackson_green_built_directly_has_make_laws_continuous_switch():
     d = float(law.switch) * w_c * (1 + 1e-12)
     assert float(law.loading_force(d)) == pytest.approx(2e10 * d**1.5, rel=1e-9)
     assert float(hc.JacksonGreen(2e10, 0.005, 1e9, switch=1.9).switch) == 1.9  # as given
+    # the same law under the caller's jit (Python numbers are traced there: it took 1.9, a review)
+    assert float(jax.jit(lambda: hc.JacksonGreen(2e10, 0.005, 1e9))().switch) == float(law.switch)
+    # a bad number is named before the switch is sought (was scipy's "f(a) and f(b) must have different
+    # signs"), and a fit that starts below Hertz is refused, as make_law refuses it
+    with pytest.raises(ParameterError, match=r"^poisson_ratio = -2.0 is invalid"):
+        hc.JacksonGreen(2e10, 0.005, 1e9, -2.0)
+    with pytest.raises(ParameterError, match=r"^yield_strength = 5000000000.0 is invalid: a law whose fit meets"):
+        hc.JacksonGreen(1e10, 0.01, 5e9)

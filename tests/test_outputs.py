@@ -49,7 +49,12 @@ def test_netcdf_follows_cf(run):
     assert ds.attrs["Conventions"] == "CF-1.10"
     for key in ("title", "history", "source", "source_file", "version"):
         assert ds.attrs[key]
-    assert ds.attrs["source_file"] == str(path) and "hertz_chain" in ds.attrs["version"]
+    assert ds.attrs["source_file"] == str(path.resolve()) and "hertz_chain" in ds.attrs["version"]
+    import hashlib  # the input's SHA-256 (provenance: which stack the file came from)
+
+    assert ds.attrs["source_file_sha256"] == hashlib.sha256(path.read_bytes()).hexdigest()
+    # the refined peak force (at the refined peak's time) beside the sampled one: never below it
+    assert float(ds["peak_force_refined"][0]) >= float(ds["peak_force"][0]) > 0
     assert ds.cf.axes["T"] == ["time"] and ds.cf.standard_names["time"] == ["time"]
     for name, var in {**ds.data_vars, **ds.coords}.items():
         assert var.attrs.get("long_name"), name
@@ -122,7 +127,7 @@ def test_a_partial_run_is_marked_in_every_file_and_headers_stay_one_line(tmp_pat
     table = pd.read_csv(tmp_path / "cut.csv", comment="#")
     assert list(table.columns) == ["time_s", "accelerometer_mps2", "accelerometer_g", "velocity_mps"]
     ds = xr.open_dataset(tmp_path / "cut.nc", engine="h5netcdf")
-    assert ds.attrs["partial"] == 1 and ds.attrs["warnings"] == ("\n".join(report.warnings) or "none")
+    assert ds.attrs["partial"] == 1 and ds.attrs["warnings"] == "\n".join(report.warnings)
     with pytest.raises(OutputPathError, match=r"path .*out\.json: a \.nc \(NetCDF\) or \.csv file"):
         write_output(report, tmp_path / "out.json")
     assert not (tmp_path / "out.json").exists()

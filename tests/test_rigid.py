@@ -340,6 +340,20 @@ def test_efficiency_and_total_mass_from_energies():
     assert rigid.met_efficiency(1.0, 7) == pytest.approx(1.0, rel=1e-13)  # elastic MET: all energy on top
 
 
+def test_numbers_numpy_reads_pass_and_text_is_refused():
+    """Eq 19 by hand, (1 + e_0) prod (1 + e)/(1 + r) - 1 = 1.9 (1.8/1.5)^2 - 1 = 1.736 for masses 1, 0.5,
+    0.25, e = 0.8, e_0 = 0.9: with None in the restitution's unused ground entry (it worked before the
+    input checks and must still), with fractions; text (even "0.012") is refused, naming the argument."""
+    from fractions import Fraction
+
+    assert rigid.stack_gain([1, 0.5, 0.25], [None, 0.8, 0.8], ground_restitution=0.9) == pytest.approx(1.736, rel=1e-14)
+    assert rigid.stack_gain([1, Fraction(1, 2), 0.25], Fraction(4, 5), ground_restitution=0.9) == pytest.approx(
+        1.736, rel=1e-14)
+    for bad in ("0.012", ["a", 1]):
+        with pytest.raises(ParameterError, match=r"^R = .* is invalid: a real number"):
+            rigid.mvg_gain(bad, 0.8, 6)
+
+
 def test_mvg_total_mass_near_r_one_is_the_sum_of_the_masses():
     """Eq 15's geometric sum (1 - x^n)/(1 - x) was 0/0 = NaN where x = R^(1/(n-1)) rounds to 1 (a review:
     R = 1 - 1e-15, n = 1000); against math.fsum of the masses m_1 R^((i-1)/(n-1)), summed here."""
