@@ -110,8 +110,9 @@ def write_atomically(path: str | Path, write_fn: Callable[[Path], object], force
     try:
         try:
             write_fn(tmp)
-        except OSError as exc:
-            raise OutputPathError(key, _show(path), f"cannot write it ({exc.strerror or exc})") from None
+        except OSError as exc:  # (the writer's own words name the temporary file: name the user's instead)
+            why = str(exc.strerror or exc).replace(str(tmp), str(path)).replace(tmp.name, path.name)
+            raise OutputPathError(key, _show(path), f"cannot write it ({why})") from None
         if not tmp.exists():
             raise OutputPathError(key, _show(path), "the writer produced no file")
         if force:

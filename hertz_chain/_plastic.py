@@ -213,7 +213,7 @@ class JacksonGreen(_ElasticPlastic):
     - **Loading:** Hertz ``P = k delta^{3/2}``; for ``w* >= 1.9`` the FE fit ``P / P_c = exp(-w*^{5/12} / 4)
       w*^{3/2} + (4 H_G / (C S_y)) (1 - exp(-w*^{5/9} / 25)) w*``, with the contact radius ``a = sqrt(R
       delta) (w*/1.9)^{B/2}``, ``B = 0.14 exp(23 S_y / E')``, and the hardness ``H_G / S_y = 2.84 (1 -
-      exp(-0.82 (a/R)^{-0.7}))``. The published fit starts at ``w* = 1.9``, where it lies 0.5 % above
+      exp(-0.82 (a/R)^{-0.7}))``. The published fit starts at ``w* = 1.9``, where it lies 0.47 % above
       Hertz; the force here switches to it where the two meet (``switch``, about ``w* = 2.006`` for
       steels: computed per law), so that the force is continuous and the energy audit closes. The
       contact radius follows the fit from 1.9 on, as published.
@@ -224,7 +224,7 @@ class JacksonGreen(_ElasticPlastic):
     **Arguments:** ``k`` (N/m^1.5), ``radius`` R* (m), ``yield_strength`` S_y (Pa), ``poisson_ratio`` nu (for
     ``C``; 0.3 when unknown), ``switch`` (``w*`` where the force joins the fit; by default computed, as
     `from_config` does, where every parameter is one number (also a Python number under `jit`); else
-    1.9, where the fit starts, 0.5 % above Hertz: pass it where the parameters are arrays or traced).
+    1.9, where the fit starts, 0.47 % above Hertz: pass it where the parameters are arrays or traced).
     Raises `ParameterError` where the fit starts below Hertz (no continuous switch; `switch = 1.9`
     accepts the jump). Applied to two curved bodies with their effective ``E*`` and ``R*``, the usual approximation.
     """

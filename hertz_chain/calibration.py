@@ -508,7 +508,7 @@ def _dashpot_zeta_cached(e: float, clamp: bool) -> float:
 
 def hertz_dashpot_zeta(e: float, clamp: bool = True) -> float:
     r"""Scaled dashpot $\zeta = \gamma\, m^{*-3/5} k^{-2/5} v^{-1/5}$ of Hertz with a linear dashpot,
-    $F = k\delta^{3/2} + \gamma\dot\delta$ (Rosas, Romero, Nesterenko & Lindenberg 2007, Phys. Rev. Lett. 99,
+    $F = k\delta^{3/2} + \gamma\dot\delta$ (Rosas, Romero, Nesterenko & Lindenberg 2007, Phys. Rev. Lett. 98,
     164301), giving restitution $e$ at the speed $v$. Numerical inversion; cached on ``(e, clamp)``."""
     e = check_restitution(e, minimum=MIN_CALIBRATED_RESTITUTION)
     return _dashpot_zeta_cached(e, bool(clamp))

@@ -401,7 +401,7 @@ class Viscoelastic(_SpeedAndMassCalibrated):
 class HertzDashpot(_SpeedAndMassCalibrated):
     """Hertz with a linear dashpot, ``F = k delta^{3/2} + gamma delta_dot`` (gamma in N s/m): the model
     of dissipative granular chains of Rosas, Romero, Nesterenko & Lindenberg (2007), "Observation of
-    two-wave structure in strongly nonlinear dissipative granular chains", Phys. Rev. Lett. 99, 164301.
+    two-wave structure in strongly nonlinear dissipative granular chains", Phys. Rev. Lett. 98, 164301.
 
     The dashpot acts from the first touch, so the force jumps to ``gamma v`` at contact (a rough onset for
     the solver and for gradients: `registry.LawRow.smooth_onset` is False). Its restitution depends on

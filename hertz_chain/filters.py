@@ -16,7 +16,7 @@ table rounds CFC 1000's to 1650 Hz); it is flat within 0.5 dB up to the standard
 frequency itself.
 
 **The corridor** (the response's tolerance lines; ISO 6487's table, as restated in UN Regulation
-No. 94, Rev. 4, Annex 8): `F_L ≤ 0.1 Hz`, `F_H = CFC`, `F_N = 1.65·CFC` (100, 300, 1000, 1650 Hz);
+No. 94, Rev. 4, Annex 8): `F_L ≤ 0.1 Hz`, `F_H = CFC`, `F_N` = 100, 300, 1000, 1650 Hz (about 5/3 CFC);
 +0.5/−1 dB from `F_L` to `F_H`; +0.5/−4 dB at `F_N`; above `F_N` the upper line falls at −9 dB/octave
 (to −30 dB) and the lower one at −24 dB/octave. tests/test_filters.py checks the filter inside it
 at the lowest sample rate it accepts and at a hundred times F_N (margins: ≥ 0.5 dB in the passband,
