@@ -223,6 +223,10 @@ def _build(data: Mapping) -> StackSpec:
 
     solver = _parse_solver(top["solver"]) if "solver" in top else SolverSpec()
     wall = _parse_wall(top["wall"], bodies, n) if "wall" in top else None
+    if wall is not None and ground is None:  # a review: run, then called "held" by the analysis while the
+        # beads left the wall (a chain between two walls is the ground's and the wall's)
+        raise _error("wall", "needs drop.ground = true: [wall] closes a chain between the ground at mass 1 and "
+                     "a far wall at the top mass")
     if (bodies.end_force > 0 or wall is not None) and solver.until != "t_max":
         what = "stack.end_force" if bodies.end_force > 0 else "[wall]"
         raise _error("solver.until", f"'{solver.until}' with {what}: a chain held by an end force or a wall "

@@ -264,3 +264,19 @@ def test_design_maps_refuse_held_chains_in_one_line(tmp_path):
     doc["sweep"] = {"axis": [{"key": "stack.masses", "index": [2], "values": ["4 g", "5 g"]}]}
     with pytest.raises(StackFileError, match=r"sweep.*held by stack\.end_force"):
         hc.sweep(_file(tmp_path, doc), tmp_path / "out.zarr")
+
+
+def test_a_wall_without_the_ground_is_refused_in_one_line():
+    """A review: `[wall]` with `drop.ground = false` ran, and the analysis called the chain held ("never flies
+    apart") while its beads left the wall; a wall closes a chain between the ground and it, as
+    `stack.end_force` needs the ground."""
+    from hertz_chain.errors import StackFileError
+    from hertz_chain.stackfile import parse_stack
+
+    doc = {"drop": {"gravity": 0, "ground": False},
+           "stack": {"masses": [0.01, 0.01, 0.01], "gaps": 0, "velocities": ["1 m/s", 0, 0]},
+           "contact": {"law": "hertz", "stiffness": "1e9 N/m^1.5"},
+           "wall": {"gap": 0, "stiffness": "1e9 N/m^1.5"}, "solver": {"until": "t_max", "t_max": "1 ms"}}
+    with pytest.raises(StackFileError, match=r"^wall: needs drop.ground = true") as info:
+        parse_stack(doc)
+    assert "\n" not in str(info.value)
