@@ -181,6 +181,9 @@ class Stack(eqx.Module):
             raise ParameterError("wall_position" if wall_position is None else "wall_stiffness", None,
                                  "given together with the other (a far wall needs its stiffness and position)")
         wall = wall_stiffness is not None
+        if wall and not ground:  # as the stack file's [wall]: the analysis takes a walled chain as held
+            raise ParameterError("wall_stiffness", "given with ground=False", "a far wall only with the ground "
+                                 "(ground=True): it closes a chain between the ground at mass 1 and the wall")
         wall_stiffness = jnp.asarray(0.0 if wall_stiffness is None else wall_stiffness, dtype=float)
         wall_position = jnp.asarray(0.0 if wall_position is None else wall_position, dtype=float)
         if wall and _is_concrete(wall_stiffness, wall_position):

@@ -280,3 +280,5 @@ def test_a_wall_without_the_ground_is_refused_in_one_line():
     with pytest.raises(StackFileError, match=r"^wall: needs drop.ground = true") as info:
         parse_stack(doc)
     assert "\n" not in str(info.value)
+    with pytest.raises(hc.ParameterError, match=r"^wall_stiffness = .* a far wall only with the ground"):
+        hc.Stack([0.01] * 3, hc.Hertz(1e9), ground=False, wall_stiffness=1e9, wall_position=0.1)
