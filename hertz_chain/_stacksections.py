@@ -131,7 +131,7 @@ def _per_item(raw: Any, key: str, count: int | None, reader, per: str = "mass"):
                 "a list needs a known number of masses; with n = 'optimal' give one value for all",
             )
         if len(raw) != count:
-            raise _error(key, f"has {len(raw)} entries, expected {count} (one per {per})")
+            raise _error(key, f"has {len(raw)} {'entry' if len(raw) == 1 else 'entries'}, expected {count} (one per {per})")
         return tuple(reader(item, f"{key}[{i}]") for i, item in enumerate(raw))
     return reader(raw, key)
 
@@ -483,7 +483,7 @@ def _parse_stack(raw: Any, default_restitution: float | None) -> StackSectionSpe
         if n is None:
             raise _error("stack.velocities", "needs a known number of masses; give stack.design.n")
         if len(v) != n:
-            raise _error("stack.velocities", f"has {len(v)} entries, expected {n} (one per mass)")
+            raise _error("stack.velocities", f"has {len(v)} {'entry' if len(v) == 1 else 'entries'}, expected {n} (one per mass)")
         velocities = tuple(parse_quantity(x, "velocity", f"stack.velocities[{i}]") for i, x in enumerate(v))
 
     end_force = _non_negative(t["end_force"], "stack.end_force", "force") if "end_force" in t else 0.0
