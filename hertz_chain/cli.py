@@ -33,7 +33,7 @@ Exit status (`hertz_chain.status.Status.exit_code`):
 |---|---|
 | 0 | the run completed (`complete`, `complete with rebounds`); `--help`; `check`: every criterion passed |
 | 1 | `check`: a criterion failed (the table/JSON says which, with its margin) |
-| 2 | bad input: a stack file, flag, value or output path refused before anything ran; a usage error |
+| 2 | bad input: a stack file, flag, value or output path refused before anything ran; a usage error; an output file that could not be written after the run |
 | 3 | incomplete: `t_max` or `max_steps` came before the cascade ended (partial results are written) |
 | 4 | no contact: nothing touched before `t_max` |
 | 5 | failed: the solver produced a non-finite state |
