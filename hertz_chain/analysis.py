@@ -149,6 +149,18 @@ def _main_restitution(episodes, n: int, v_ref: float) -> np.ndarray:
     return e
 
 
+def _index_ranges(indices) -> str:
+    """Interface numbers for a message, runs joined: `[1, 2, 3, 4, 7]` -> "[1-4, 7]" (a long chain's
+    touching beads listed every number)."""
+    runs: list[list[int]] = []
+    for j in indices:
+        if runs and j == runs[-1][1] + 1:
+            runs[-1][1] = j
+        else:
+            runs.append([j, j])
+    return "[" + ", ".join(str(a) if a == b else f"{a}, {b}" if b == a + 1 else f"{a}-{b}" for a, b in runs) + "]"
+
+
 def _rigid_comparison(sol, e_meas, e_nom, v_ref) -> RigidComparison:
     stack = sol.stack
     if stack.held:  # never flies apart: no launch, no rigid cascade to compare with
@@ -186,7 +198,8 @@ def _rigid_comparison(sol, e_meas, e_nom, v_ref) -> RigidComparison:
         e_nom = np.asarray(e_nom, dtype=float)
         if not np.isfinite(e_nom[first:]).all():
             notes.append("nominal: no nominal restitution for interface(s) "
-                         f"{[j for j in range(first, n) if not np.isfinite(e_nom[j])]} (a speed-dependent law "
+                         f"{_index_ranges([j for j in range(first, n) if not np.isfinite(e_nom[j])])} (a "
+                         "speed-dependent law "
                          "given by its raw parameter, or an elastic–plastic law)")
         else:
             nominal = safe(lambda: closed_form(e_nom), "nominal")
@@ -196,7 +209,7 @@ def _rigid_comparison(sol, e_meas, e_nom, v_ref) -> RigidComparison:
     defined = np.isfinite(e_meas[first:]).all()
     if not defined:
         bad = [j for j in range(first, n) if not np.isfinite(e_meas[j])]
-        notes.append(f"measured restitution undefined for interface(s) {bad}: no single complete "
+        notes.append(f"measured restitution undefined for interface(s) {_index_ranges(bad)}: no single complete "
                      "contact with a positive approach speed (touching or persistently loaded)")
     else:
         e_rig = as_rigid_restitution(e_meas)  # an elastic contact's 1 + round-off is 1

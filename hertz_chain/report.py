@@ -164,6 +164,30 @@ def model_label(report: Report) -> str:
     return f"compliant ({', '.join(names)})"
 
 
+# a long chain's table: its first and last rows (the wave's start and the launch); --json has every row
+_TABLE_HEAD, _TABLE_TAIL = 10, 10
+_MASSES_LISTED = 12
+
+
+def _shown_rows(n: int) -> range | set:
+    """The rows of the per-mass table the text report prints: all up to `_TABLE_HEAD + _TABLE_TAIL + 5`
+    masses, else the first `_TABLE_HEAD` and the last `_TABLE_TAIL`."""
+    if n <= _TABLE_HEAD + _TABLE_TAIL + 5:
+        return range(n)
+    return set(range(_TABLE_HEAD)) | set(range(n - _TABLE_TAIL, n))
+
+
+def _masses_text(masses) -> str:
+    """The masses for the report's header: every one up to `_MASSES_LISTED`, "0.01 kg each" where all are
+    equal, else the first and last three (a 1,000-bead chain made a 9,000-character line)."""
+    m = [float(x) for x in masses]
+    if len(m) > 1 and all(x == m[0] for x in m):
+        return f"{m[0]:.4g} kg each"
+    if len(m) <= _MASSES_LISTED:
+        return f"{', '.join(f'{x:.4g}' for x in m)} kg"
+    return f"{', '.join(f'{x:.4g}' for x in m[:3])}, ..., {', '.join(f'{x:.4g}' for x in m[-3:])} kg"
+
+
 def summary_table(report: Report, title: str | None = None) -> str:
     """A readable summary: gains (the compliant model that was run, `model_label`, against the rigid
     theory), e_eff per contact, the top pulse, the regime."""
@@ -184,7 +208,7 @@ def summary_table(report: Report, title: str | None = None) -> str:
     # a stack falls onto the ground at its drop speed; a chain (no ground, or held) is struck at its striker's
     speed = "drop speed" if r.ground and not held else "striker speed"
     lines.append(f"{speed} {r.drop_speed:.4g} m/s, {len(r.masses)} mass{'es' if len(r.masses) != 1 else ''} "
-                 f"({', '.join(f'{m:.4g}' for m in r.masses)} kg)")
+                 f"({_masses_text(r.masses)})")
     lines.append("")
     lines.append("top-mass velocity at t_max over the striker speed (a held chain has no launch)" if held
                  else "top-mass velocity gain G_n = V_n / v_ff" if speed == "drop speed"
@@ -205,7 +229,13 @@ def summary_table(report: Report, title: str | None = None) -> str:
     lines.append("mass  gain     | interface  e_nominal  e_eff    episodes")
     nominal = r.rigid.nominal_restitution
     first = 0 if r.ground else 1
+    shown = _shown_rows(len(r.velocity_gains))
     for i, gain in enumerate(r.velocity_gains):
+        if i not in shown:
+            if i == _TABLE_HEAD:
+                lines.append(f"   ...  ({len(r.velocity_gains) - len(shown)} masses {_TABLE_HEAD + 1}-"
+                             f"{len(r.velocity_gains) - _TABLE_TAIL} left out; --json lists every mass)")
+            continue
         j = i  # interface below mass i+1
         count = sum(ep.interface == j for ep in r.episodes)
         label = "ground-1" if j == 0 else f"{j}-{j + 1}"

@@ -18,6 +18,8 @@ References:
 - the size limits of `constants.MAX_MASSES`.
 """
 
+import re
+
 import numpy as np
 import pytest
 import tomli_w
@@ -123,6 +125,28 @@ def test_solitary_wave_speed_follows_nesterenkos_one_fifth_power():
     from hertz_chain.report import to_dict
 
     assert to_dict(r2)["wave_speed_per_s"] == r2.wave_speed
+    # the text report of a 40-bead chain: the masses in a few words, the first and last ten rows of the
+    # per-mass table (the rest in --json), the touching beads' undefined restitutions as one range
+    from hertz_chain.report import summary_table
+
+    text = summary_table(r2)
+    assert "40 masses (0.0045 kg each)" in text
+    rows = [line for line in text.splitlines() if re.match(r"\s*\d+\s+-?\d\.\d{4}\s+\|", line)]
+    assert [int(line.split()[0]) for line in rows] == list(range(1, 11)) + list(range(31, 41))
+    assert "(20 masses 11-30 left out; --json lists every mass)" in text
+    assert len(to_dict(r2)["masses_kg"]) == 40 and len(to_dict(r2)["velocity_gains"]) == 40
+    undefined = [j for j in range(1, 40) if not np.isfinite(r2.restitution[j])]
+    assert undefined == list(range(undefined[0], 40)) and len(undefined) > 2  # touching beads: one run
+    assert f"interface(s) [{undefined[0]}-39]" in text
+
+
+def test_interface_lists_in_messages_join_runs():
+    from hertz_chain.analysis import _index_ranges
+
+    assert _index_ranges([1, 2, 3, 4, 7]) == "[1-4, 7]"
+    assert _index_ranges([2, 3, 5, 9, 10, 11]) == "[2, 3, 5, 9-11]"
+    assert _index_ranges([0]) == "[0]"
+    assert _index_ranges([]) == "[]"
 
 
 def test_wave_speed_needs_one_monotone_wave():
