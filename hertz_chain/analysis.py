@@ -98,6 +98,8 @@ class Report:
     peak_velocity_times: np.ndarray | None = None  # (n,) and when (Hermite-refined with the accelerations)
     wave_speed: float = float("nan")  # contacts/s along a touching chain of >= 8 masses, + up (`wave_speed`)
     wall_peak_force: float = float("nan")  # the far wall's largest force on the top mass at the steps (N; [wall])
+    title: str | None = None  # the stack file's title, where the run came from one (`simulate_file`, `run_spec`)
+    source_file: str | None = None  # the stack file it was read from (`simulate_file`): the exports' provenance
 
     @property
     def top_pulse(self) -> PulseMetrics | None:

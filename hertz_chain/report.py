@@ -302,14 +302,18 @@ def _history(report: Report):
     return sol.steps, "the solver's adaptive steps"
 
 
-def _metadata(meta: dict | None) -> dict:
-    """Provenance of an export: title, input file, package version, date and command."""
+def _metadata(meta: dict | None, report: Report | None = None) -> dict:
+    """Provenance of an export: title, input file, package version, date and command. `meta`'s `title`
+    and `source_file` where given, else the report's own (`Report.title`, `Report.source_file`: a report
+    of `simulate_file` exported from Python carried neither)."""
     import datetime
     import sys
 
     from . import __version__
 
-    meta = dict(meta or {})
+    own = {} if report is None else {"title": getattr(report, "title", None),
+                                     "source_file": getattr(report, "source_file", None)}
+    meta = {**own, **{k: v for k, v in dict(meta or {}).items() if v is not None}}
     now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
     # shlex.join: a review found `--set solver.t_max="10 ms"` recorded as `--set solver.t_max=10 ms`, which
     # does not run again
@@ -442,7 +446,7 @@ def to_dataset(report: Report, meta: dict | None = None):
                                         "interface j = mass j - mass j+1")
     attrs["time_sampling"] = sampling
     attrs["standard_gravity_m_s2"] = G0
-    attrs.update(_metadata(meta))
+    attrs.update(_metadata(meta, report))
     attrs["Conventions"] = "CF-1.10"
     attrs["source"] = f"{attrs['version']}, {model_label(report)} model"
     return xr.Dataset(data, coords=coords, attrs=attrs)
@@ -451,7 +455,8 @@ def to_dataset(report: Report, meta: dict | None = None):
 def write_output(report: Report, path: str | Path, meta: dict | None = None) -> None:
     """Write `.nc` (the CF `to_dataset`, compressed) or `.csv` (time, the top mass's accelerometer in
     m/s² and in g, its velocity), the history on the file's uniform grid when it asks for one.
-    `meta`: `title` and `source_file` for the provenance. The CSV starts with `#` comment lines: the
+    `meta`: `title` and `source_file` for the provenance (default: the report's own, which
+    `simulate_file` sets; `analyse`'s report has none). The CSV starts with `#` comment lines: the
     title, the input file, the version, the date, the run's status (with `PARTIAL RESULTS` where the run
     did not complete), its warnings, the units and the sampling.
 
@@ -480,7 +485,7 @@ def write_output(report: Report, path: str | Path, meta: dict | None = None) -> 
             columns.append(np.asarray(stack.wall_force(np.asarray(st.positions))))
             names, described = names + ",wall_force_N", "; force of the far wall on it (N)"
         table = np.column_stack(columns)
-        m = _metadata(meta)
+        m = _metadata(meta, report)
         status = report.status
         head = [f"{m['title']}", f"input file: {m['source_file'] or '(none)'}"
                 + (f" (sha256 {m['source_file_sha256']})" if m.get("source_file_sha256") else ""), f"written by {m['version']}; {m['history']}",

@@ -10,6 +10,7 @@ What they produce is shown by `hertz_chain.report` (table, JSON, NetCDF, CSV).
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -45,8 +46,9 @@ def run_spec(spec: StackSpec) -> Report:
         sol = simulate(built.stack, built.state, ts=ts, **dict(options, t_max=sol.t_final))
     tol = {k: built.simulate_options["tolerances"].__getattribute__(k) for k in ("rtol", "atol")} \
         if built.simulate_options.get("tolerances") is not None else None
-    return analyse(sol, nominal_restitution=built.nominal_restitution, tolerances=tol, srs_options=srs_options(spec),
-                   yield_limits=built.yield_limits)
+    report = analyse(sol, nominal_restitution=built.nominal_restitution, tolerances=tol,
+                     srs_options=srs_options(spec), yield_limits=built.yield_limits)
+    return dataclasses.replace(report, title=spec.title)
 
 
 def srs_options(spec: StackSpec):
@@ -58,8 +60,9 @@ def srs_options(spec: StackSpec):
 
 
 def simulate_file(path: str | Path) -> Report:
-    """Read, simulate and analyse a stack file."""
-    return run_spec(load_stack_file(path))
+    """Read, simulate and analyse a stack file. The report keeps the file's title and path
+    (`Report.title`, `Report.source_file`), which `report.write_output` records."""
+    return dataclasses.replace(run_spec(load_stack_file(path)), source_file=str(path))
 
 
 def design_report(*, ratio=None, m1=None, mn=None, e):

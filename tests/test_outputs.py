@@ -6,6 +6,8 @@ accelerometer on the dense solution (`hc.accelerometer`) for the exported column
 sampled peak, `A (1 - cos(pi dt / D))` for a pulse of duration D sampled every dt.
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -98,6 +100,27 @@ def test_csv_starts_with_its_provenance(run):
     assert lines[: len(comments)] == comments and len(comments) >= 4
     text = "\n".join(comments)
     assert str(path) in text and "hertz_chain" in text and "m/s^2" in text and "uniform grid" in text
+
+
+def test_a_report_of_a_stack_file_exported_from_python_keeps_its_title_and_source(run):
+    # hc.simulate_file's report carries the file's title and path: write_output without `meta` records
+    # them (a review: the default title and no input file); `meta` still overrides
+    report, d, path = run
+    assert report.title == "one sphere on a Hertz ground, sampled every microsecond" and report.source_file == str(path)
+    write_output(report, d / "own.nc")
+    write_output(report, d / "own.csv")
+    with xr.open_dataset(d / "own.nc", engine="h5netcdf") as ds:
+        assert ds.attrs["title"] == "one sphere on a Hertz ground, sampled every microsecond"
+        assert ds.attrs["source_file"] == str(path.resolve())
+        import hashlib
+
+        assert ds.attrs["source_file_sha256"] == hashlib.sha256(path.read_bytes()).hexdigest()
+    head = (d / "own.csv").read_text().splitlines()[:2]
+    assert head[0] == "# one sphere on a Hertz ground, sampled every microsecond" and f"input file: {path.resolve()}" in head[1]
+    bare = dataclasses.replace(report, title=None, source_file=None)  # a report from hc.analyse: the defaults
+    write_output(bare, d / "bare.csv")
+    head = (d / "bare.csv").read_text().splitlines()[:2]
+    assert head[0] == "# hertz_chain simulation" and head[1] == "# input file: (none)"
 
 
 def test_a_partial_run_is_marked_in_every_file_and_headers_stay_one_line(tmp_path, monkeypatch):
