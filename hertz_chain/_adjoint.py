@@ -310,8 +310,8 @@ def _replay_of(stack, scale, T, cfg: _SolveConfig):
         # an implicit step replayed inside a derivative: its Newton iteration differentiated as it runs
         name = type(cfg.solver).__name__  # its name in `registry.SOLVERS` where it has one ('kvaerno5')
         name = name.lower() if name.lower() in SOLVERS else name
-        raise ParameterError("solver", name, "an explicit solver (tsit5, dopri5, dopri8 or "
-                             "their -diffrax forms) for derivatives: through kvaerno5 a review measured 13-19 % "
+        raise ParameterError("solver", name, "an explicit Runge-Kutta solver (e.g. tsit5, dopri5, dopri8) for "
+                             "derivatives: through kvaerno5 a review measured 13-19 % "
                              "off central differences (viscoelastic, 1 mm gaps, gravity) and its forward mode fails")
     for law in {type(law): law for law in stack.laws}.values():
         if law.gradient_refused:

@@ -93,15 +93,25 @@ class AbstractContactLaw(eqx.Module):
     def dimensionless_damping(cls, restitution: float, *, chi_map: str = "exact", clamp: bool = True) -> float:
         """The law's dimensionless damping for the restitution ``e`` (concrete; scipy, cached): the
         number that, with the interface's stiffness, effective mass and calibration speed, fixes the
-        law's damping parameter (`from_dimensionless`). 0 for an elastic law."""
-        return 0.0
+        law's damping parameter (`from_dimensionless`). Every law calibrated to a restitution defines it
+        (optimize, sweep and fit rebuild its contacts from it, `_design.DesignMap`); elastic laws and laws
+        with memory are never asked.
+
+        **Raises** `NotImplementedError` for a law that does not define it (it returned 0, and a new law
+        ran undamped in a sweep)."""
+        raise NotImplementedError(f"{cls.__name__}.dimensionless_damping: a law calibrated to a restitution "
+                                  "defines it and from_dimensionless (docs/developers.md, 'Adding a contact law')")
 
     @classmethod
     def from_dimensionless(cls, k, d, *, effective_mass, calibration_velocity, clamp: bool = True):
         """The law from its stiffness ``k`` and dimensionless damping ``d`` (`dimensionless_damping`):
         JAX-traceable and differentiable in every argument, so that a design's contacts follow its
-        masses (`hertz_chain.optimization`). ``calibration_velocity`` is used by the speed-dependent laws."""
-        raise NotImplementedError  # pragma: no cover
+        masses (`hertz_chain.optimization`). ``calibration_velocity`` is used by the speed-dependent laws.
+
+        **Raises** `NotImplementedError` for a law that does not define it (as `dimensionless_damping`)."""
+        raise NotImplementedError(f"{cls.__name__}.from_dimensionless: a law calibrated to a restitution "
+                                  "defines it and dimensionless_damping (docs/developers.md, 'Adding a contact "
+                                  "law')")
 
     def restitution_at(self, impact_velocity: ArrayLike, effective_mass: ArrayLike | None = None):
         """Coefficient of restitution of an isolated impact at ``impact_velocity`` (m/s).

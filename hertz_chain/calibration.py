@@ -328,7 +328,9 @@ def _nondim_functions(law: str, p: float):
             lambda x, v: max(x, 0.0) ** 1.5 + p * v if x >= 0.0 else 0.0,
             lambda x, v: max(x, 0.0) ** 1.5 + p * v,
         )
-    raise ParameterError("law", law, f"one of {list(_LAWS)}")
+    raise ParameterError("law", law, "one of ['hertz', 'hunt-crossley', 'tsuji', 'kelvin-voigt', 'viscoelastic', "
+                         "'hertz-dashpot'] (the laws with a one-parameter nondimensional impact; the others: "
+                         "their restitution_at)")
 
 
 def nondimensional_impact(law: str, parameter: float = 0.0, clamp: bool = True) -> NondimensionalImpact:

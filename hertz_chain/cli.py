@@ -798,3 +798,7 @@ def main(argv: list[str] | None = None) -> None:
         code = getattr(exc, "exit_code", EXIT_BAD_INPUT)
         sys.exit(code if isinstance(code, int) and code else EXIT_BAD_INPUT)
     sys.exit(code if isinstance(code, int) else 0)
+
+
+if __name__ == "__main__":  # python -m hertz_chain.cli
+    main()

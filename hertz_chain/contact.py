@@ -514,7 +514,18 @@ LAW_NAMES: tuple[str, ...] = tuple(_registry.LAWS)
 """Configuration names of the contact laws, as used in stack files and by `make_law`
 (`hertz_chain.registry.LAWS`)."""
 
-_LAW_CLASSES = {name: globals()[row.cls] for name, row in _registry.LAWS.items()}
+def _law_class(row: _registry.LawRow) -> type:
+    """The class of a registry row, defined or imported in this module (a new law in `_plastic` is
+    imported above, as Thornton is)."""
+    try:
+        return globals()[row.cls]
+    except KeyError:
+        raise ImportError(f"registry.LAWS[{row.name!r}].cls = {row.cls!r}: no such class in hertz_chain.contact; "
+                          "define it there (or import it there from its own module, as Thornton from _plastic)") \
+            from None
+
+
+_LAW_CLASSES = {name: _law_class(row) for name, row in _registry.LAWS.items()}
 
 
 def make_law(

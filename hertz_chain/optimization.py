@@ -17,7 +17,7 @@ masses is optimised from masses spaced geometrically between the file's end mass
 **Methods.**
 
 - *Launch gain* (no peak limit): gradients of the top launch velocity by the replayed reverse mode of
-  `simulate.launch_velocity` through the differentiable design map (`hertz_chain._design`), and scipy's
+  `simulation.launch_velocity` through the differentiable design map (`hertz_chain._design`), and scipy's
   bounded quasi-Newton L-BFGS-B (SLSQP when a total-mass budget adds a linear constraint). Not
   optimistix: its quasi-Newton methods are unconstrained, and a reparametrisation onto the box can only
   approach a bound, while touching stacks often have their optimum on one.

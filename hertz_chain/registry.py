@@ -2,7 +2,7 @@
 maps (`CHI_MAPS`) and ODE solvers (`SOLVERS`), in the manner of scipy's `solve_ivp` `METHODS`.
 
 Every entry point reads these tables: `contact.make_law`, the stack-file parser (`stackfile`), the
-builder (`build`), the calibration (`calibration.CHI_MAPS`), `simulate.make_solver`, and the tests,
+builder (`build`), the calibration (`calibration.CHI_MAPS`), `simulation.make_solver`, and the tests,
 which run every row end to end (`tests/test_registry.py`). Adding a contact law is one class in
 `hertz_chain.contact` (with a `from_config` classmethod) and one row here; adding a solver or a map is
 one row.

@@ -560,7 +560,7 @@ API_ROWS = [
         __import__("hertz_chain").Stack(m, __import__("hertz_chain").Hertz(1e9)),
         __import__("hertz_chain").at_impact(__import__("hertz_chain").Stack(m, __import__("hertz_chain").Hertz(1e9)),
                                             1.0, 1e-3), solver="kvaerno5")[-1])(__import__("jax.numpy").numpy.asarray(
-        [1.0, 0.5])), ParameterError, "solver = 'kvaerno5' is invalid: an explicit solver (tsit5, dopri5, dopri8"),
+        [1.0, 0.5])), ParameterError, "solver = 'kvaerno5' is invalid: an explicit Runge-Kutta solver (e.g. tsit5, dopri5, dopri8"),
     # plain numbers of the Python API: a string, None or an array is one line (were float()'s TypeError or
     # ValueError, or a string such as "1" accepted)
     ("simulate_impact_none", lambda: __import__("hertz_chain").simulate_impact(__import__("hertz_chain").Hertz(1e9),

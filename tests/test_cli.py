@@ -116,6 +116,19 @@ def test_real_process_exit_status_and_no_traceback(tmp_path):
     assert "Traceback" not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize("module", ["hertz_chain", "hertz_chain.cli"])
+def test_python_dash_m_runs_the_command_line(tmp_path, module):
+    # `python -m hertz_chain` (a working copy without the console script) is the same command line; a review
+    # found `python -m hertz_chain.cli` exited 0 without doing anything. The bad file's exit status, no traceback
+    ok = subprocess.run([sys.executable, "-m", module, "design", "-R", "0.012", "-e", "0.8", "--json"],
+                        capture_output=True, text=True)
+    assert ok.returncode == 0 and json.loads(ok.stdout)["mvg"]["n"] == 6  # paper Fig 17, as below
+    path = tmp_path / "bad.toml"
+    path.write_text(BAD["units"])
+    bad = subprocess.run([sys.executable, "-m", module, "simulate", str(path)], capture_output=True, text=True)
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr and "stack.gaps" in bad.stderr
+
+
 def test_design_command():
     res = runner.invoke(app, ["design", "-R", "0.012", "-e", "0.8", "--json"])
     assert res.exit_code == 0, res.output

@@ -102,10 +102,17 @@ def test_clamp_switch():
 
 
 def test_names():
+    # every law of the registry is public under its class name, in hertz_chain and hertz_chain.contact (a
+    # review added a law: hc.NewLaw was an AttributeError); the names in the registry's order
     from hertz_chain import contact as hc_contact
+    from hertz_chain import registry
 
-    assert [c.name for c in (Hertz, HuntCrossley, Tsuji, KelvinVoigt, Viscoelastic, HertzDashpot, PowerLaw,
-                             Thornton, hc_contact.JacksonGreen)] == list(LAW_NAMES)
+    for name, row in registry.LAWS.items():
+        cls = getattr(hc, row.cls)
+        assert cls is getattr(hc_contact, row.cls) and row.cls in hc_contact.__all__ and row.cls in hc.__all__
+        assert cls.name == name
+    assert list(LAW_NAMES) == list(registry.LAWS)
+    assert Hertz.name == "hertz" and Tsuji.name == "tsuji" and Thornton.name == "thornton"
 
 
 @pytest.mark.parametrize("p", [1.2, 2.0])

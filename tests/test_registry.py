@@ -95,6 +95,40 @@ def test_every_damped_law_takes_its_raw_parameter(name):
     assert all(k in row.file_keys() for k in ("stiffness", "clamp", "restitution", row.damping))
 
 
+@pytest.mark.parametrize("name", [n for n, r in registry.LAWS.items()
+                                  if r.damping is not None and not r.memory and not r.params])
+def test_every_calibrated_law_follows_a_design(name):
+    # optimize, sweep and fit rebuild the contacts from a design's numbers (`_design.DesignMap`, through the
+    # law's `dimensionless_damping` / `from_dimensionless`): at the file's own values that is the law
+    # `build` made (the reference: the builder's calibration, checked against simulated impacts above); a
+    # review added a law without that pair and the sweep ran it undamped (the base class returned 0)
+    import jax
+
+    from hertz_chain._design import DesignMap
+    from hertz_chain.keys import resolve
+
+    row = registry.LAWS[name]
+    spec = stackfile.parse_stack(_file(_law_lines(row, 0.7)))
+    built = build(spec)
+    stack, _ = DesignMap(spec, resolve("stack.masses", [2], n=3, ground=True))(np.asarray([0.4]))
+    for j in range(3):
+        mine, ref = stack.law_of(j), built.stack.law_of(j)
+        assert type(mine) is type(ref)
+        for a, b in zip(jax.tree.leaves(mine), jax.tree.leaves(ref)):
+            np.testing.assert_allclose(np.asarray(a, dtype=float), np.asarray(b, dtype=float), rtol=1e-9)
+
+
+def test_a_damped_law_without_its_design_pair_is_refused_not_run_elastic():
+    # the base class's pair raises, naming the method (it returned 0: the law ran undamped in sweeps)
+    from hertz_chain._law_base import AbstractContactLaw
+
+    with pytest.raises(NotImplementedError, match="dimensionless_damping"):
+        AbstractContactLaw.dimensionless_damping.__func__(contact.KelvinVoigt, 0.7)
+    with pytest.raises(NotImplementedError, match="from_dimensionless"):
+        AbstractContactLaw.from_dimensionless.__func__(contact.KelvinVoigt, 1e7, 0.1, effective_mass=1.0,
+                                                        calibration_velocity=1.0)
+
+
 @pytest.mark.parametrize("name", list(registry.CHI_MAPS))
 def test_every_chi_map(name):
     row = registry.CHI_MAPS[name]
