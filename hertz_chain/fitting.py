@@ -46,12 +46,17 @@ import numpy as np
 from .constants import G0
 from .errors import ParameterError, SolverError, StackFileError
 from .keys import KEYS, Slot, check_values, quantity_of, read_bounds, read_entry, resolve
+from .status import Status
 
 __all__ = ["FIT_KEYS", "FitParameter", "FitResult", "parse_vary_option", "read_fit_file", "fit"]
 
 #: how much worse (Sprague-Geers C, a fraction) the fitted stack may match the record than the file's before
 #: the fit is called POOR
 POOR_FIT_C = 1e-4
+#: how many times the record's own noise (its standard deviation before the pulse, `measured.quiet_start`)
+#: the rms residual may be before the fit is called POOR: a model that explains the record leaves its noise
+#: (ratio ~1; linear resampling of the record lowers the quiet part's by up to sqrt(2))
+NOISE_RATIO = 2.0
 #: Keys of a stack file's `[fit]` section (`[[fit.vary]]` tables hold `key`, `index`, `bounds`).
 FIT_KEYS = ("vary", "max_evaluations")
 _VARY_KEYS = ("key", "index", "bounds")
@@ -277,7 +282,11 @@ class _Model:
         sol = simulate(stack, state, **self.opts)
         st = sol.steps
         if st is None or not sol.status.ok:
-            raise sol.status.error(f"the run of the design {np.asarray(x).tolist()}", "a fit needs complete runs")
+            tol = self.opts["tolerances"]  # the fit's own, tighter than a file's usual (`_tight`)
+            raise sol.status.error(f"the run of the design {np.asarray(x).tolist()}",
+                                   f"a fit needs complete runs (its solves run at rtol = {tol.rtol:g}, atol = "
+                                   f"{tol.atol:g}, whatever the file's: raise solver.max_steps for them)"
+                                   if sol.status is Status.INCOMPLETE_MAX_STEPS else "a fit needs complete runs")
         ts = np.asarray(st.t, dtype=float)
         keep = np.isfinite(ts)
         ts = ts[keep]
@@ -331,7 +340,7 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
     from scipy.optimize import least_squares
 
     from .filters import CFC_CLASSES, cfc_filter
-    from .measured import ALIGNMENTS, compare, prepare_record, read_pulse_csv
+    from .measured import ALIGNMENTS, compare, prepare_record, quiet_start, read_pulse_csv
     from .optimization import OptimizeStatus, _set_interface
     from .workflow import run_spec, srs_options
 
@@ -382,6 +391,7 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
     th_lo = np.append(np.where(log, np.log(lo_a), lo_a), -np.inf)
     th_hi = np.append(np.where(log, np.log(hi_a), hi_a), np.inf)
     cache: dict = {}
+    best: dict = {}  # the lowest cost among the points whose solves (and Jacobian's) all finished
 
     def residual_and_jacobian(theta):
         key = tuple(np.round(theta, 15))
@@ -402,6 +412,8 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
         J[:, -1] = (model.residual(run, shift + hs * width) - model.residual(run, shift - hs * width)) / (2 * hs)
         cache.clear()
         cache[key] = (r, J)
+        if not best or float(r @ r) < best["cost"]:
+            best.update(cost=float(r @ r), theta=np.array(theta))
         return r, J
 
     theta0 = to_theta(x0, start.shift)
@@ -413,8 +425,12 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
         theta, message = res.x, str(res.message)
         if res.status <= 0:
             status = OptimizeStatus.NOT_CONVERGED if res.status == 0 else OptimizeStatus.FAILED
-    except SolverError as exc:  # a design the solver cannot finish
-        theta, status, message = theta0, OptimizeStatus.FAILED, str(exc)
+    except SolverError as exc:  # a design the solver cannot finish: the best point reached (a review: the
+        # start was reported, and written as "fitted", after a failure part-way)
+        status, message = OptimizeStatus.FAILED, str(exc)
+        theta = best.get("theta", theta0)
+        message += ("; the best point reached is reported" if "theta" in best and not np.array_equal(theta, theta0)
+                    else "; no point beyond the start finished: the start is reported")
     r, J = residual_and_jacobian(theta)
     N, p = r.size, theta.size
     dof = N - p
@@ -473,10 +489,19 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
         notes.append(f"POOR FIT: the fitted stack matches the record worse than the file's (Sprague-Geers C "
                      f"{start.sprague_geers[2]:.4f} -> {fitted.sprague_geers[2]:.4f}): check the units, the "
                      "varied parameters and their bounds")
+    # against the record's own noise, its standard deviation before the pulse (a review: a fit whose bounds
+    # excluded the truth left 4.5 times the noise, 4 % of the peak, and passed for a calibration)
+    _, noise, quiet = quiet_start(t, m)
+    if np.isfinite(noise) and noise > 1e-6 * float(np.max(np.abs(m))) and rms * G0 > NOISE_RATIO * noise:
+        notes.append(f"POOR FIT: the rms residual ({rms:.4g} g) is {rms * G0 / noise:.3g} times the record's noise "
+                     f"({noise / G0:.4g} g, the standard deviation of its {quiet} samples before the pulse): the "
+                     "model leaves a systematic misfit (check the fixed parameters, the bounds, the units)")
     if rms > 0.1 * peak:
         notes.append(f"POOR FIT: the rms residual ({rms:.4g} g) is {100 * rms / peak:.0f} % of the measured peak "
                      f"({peak:.5g} g): the model does not reproduce the record (check the units, the varied "
                      "parameters, the stack)")
+    head = ("# fitted by hertz-chain fit\n" if status.ok else
+            f"# hertz-chain fit {status.text}: the best point reached, NOT a converged fit (not a calibration)\n")
     return FitResult(tuple(params), float(shift), float(se_theta[-1] * width), rms, N,
                      dof, corr, status, message, model.evaluations, time.perf_counter() - t0, start, fitted,
-                     "# fitted by hertz-chain fit\n" + text, tuple(notes))
+                     head + text, tuple(notes))

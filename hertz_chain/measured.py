@@ -327,6 +327,22 @@ class Comparison:
         }
 
 
+QUIET_MIN_SAMPLES = 20  # fewer samples before the pulse: no estimate of the record's offset and noise
+
+
+def quiet_start(t, a) -> tuple[float, float, int]:
+    """The record before its pulse, the channel's own baseline: `(mean, standard deviation, count)` of the
+    samples before the main pulse's 10 % start (`pulse_metrics`) less a quarter of its 10 % duration;
+    `(nan, nan, count)` where fewer than `QUIET_MIN_SAMPLES` samples lie there (a record that starts at the
+    impact). `a` upward-positive, as `prepare_record` returns it."""
+    t, a = np.asarray(t, dtype=float), np.asarray(a, dtype=float)
+    pm = pulse_metrics(t, a)
+    quiet = a[t < pm.t_start_10 - 0.25 * pm.duration_10]
+    if quiet.size < QUIET_MIN_SAMPLES:
+        return float("nan"), float("nan"), int(quiet.size)
+    return float(quiet.mean()), float(quiet.std(ddof=1)), int(quiet.size)
+
+
 def prepare_record(measured: MeasuredPulse, cfc: int | None = None) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """The measured record as :func:`compare` and `hertz_chain.fitting` use it, before any filter:
     `(t, a, notes)` on a uniform grid (a non-uniform record resampled linearly at its mean rate, a
@@ -353,6 +369,15 @@ def prepare_record(measured: MeasuredPulse, cfc: int | None = None) -> tuple[np.
         m_u = -m_u
         notes.append("the measured pulse is negative-going (its largest excursion is below zero): it is compared "
                      "with its sign flipped, as the model's top pulse is positive (upward acceleration)")
+    # a constant offset of the channel (a review: +5 g, 0.4 % of the peak, moved a fitted e by 2.4 standard
+    # errors without a word): its mean before the pulse, beyond 4 standard errors of that mean and 0.1 % of the
+    # peak
+    mean, std, count = quiet_start(t, m_u)
+    peak = float(np.max(m_u))
+    if count and np.isfinite(mean) and abs(mean) > max(4 * std / np.sqrt(count), 1e-3 * peak):
+        notes.append(f"the record's quiet start ({count} samples before the pulse) averages {mean / G0:.4g} g "
+                     f"({100 * mean / peak:+.2f} % of the peak), not 0: an offset of the channel shifts the "
+                     "velocity change and biases a fit; subtract it (the pre-trigger mean) first")
     return t, m_u, notes
 
 
