@@ -437,6 +437,10 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
     s2 = float(r @ r) / max(dof, 1)
     cov = s2 * np.linalg.pinv(J.T @ J)
     se_theta = np.sqrt(np.clip(np.diag(cov), 0, None))
+    # a parameter the residual does not move at all (a zero Jacobian column): pinv gives it a standard error of 0,
+    # which would read as perfectly determined; it is not determined at all
+    col = np.linalg.norm(J, axis=0)
+    se_theta = np.where(col <= 1e-12 * max(float(col.max()), 1e-300), np.inf, se_theta)
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(se_theta, se_theta)
     x, shift = to_x(theta)

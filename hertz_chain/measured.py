@@ -29,6 +29,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import io
+import math
 import re
 from pathlib import Path
 from typing import Any
@@ -124,10 +125,13 @@ def read_pulse_csv(path, *, time_unit: str | None = None, accel_unit: str | None
     lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         raise ParameterError(str(path), "no data rows", "a time column and an acceleration column")
-    dialect = ";" if ";" in lines[0] else ("," if "," in lines[0] else None)
-    rows = [r for r in csv.reader(io.StringIO("\n".join(lines)), delimiter=dialect)] if dialect else \
-        [ln.split() for ln in lines]
-    header = None
+    def separator(line):
+        return ";" if ";" in line else ("," if "," in line else None)
+
+    def split(block):  # by the separator of the block's first line (a header may use another, a review)
+        sep = separator(block[0]) if block else None
+        return [r for r in csv.reader(io.StringIO("\n".join(block)), delimiter=sep)] if sep else \
+            [ln.split() for ln in block], sep
 
     def numeric(cells):
         try:
@@ -136,8 +140,17 @@ def read_pulse_csv(path, *, time_unit: str | None = None, accel_unit: str | None
         except ValueError:
             return False
 
-    if not numeric(rows[0]):
-        header, rows = rows[0], rows[1:]
+    header = None
+    first, _ = split(lines[:1])
+    if not numeric(first[0]):
+        header, lines = [c.strip() for c in first[0]], lines[1:]
+        below, _ = split(lines[:1])
+        if below and not numeric(below[0]) and not any(_unit_of(h) for h in header):
+            # a second header row of units under the names (`time,accel` then `ms,g`): the columns' units
+            header = [f"{h} ({u.strip()})" if u.strip() else h for h, u in zip(header, below[0])] \
+                + header[len(below[0]):]
+            lines = lines[1:]
+    rows, dialect = split(lines)
     need = max(time_column, accel_column) + 1
     if header is not None and len(header) < need:
         raise ParameterError(f"{path}: columns", len(header), f"at least {need} columns")
@@ -167,8 +180,10 @@ def read_pulse_csv(path, *, time_unit: str | None = None, accel_unit: str | None
         data = np.array([[float(r[time_column]), float(r[accel_column])] for r in rows], dtype=float)
     except (ValueError, IndexError):
         bad = next(i for i, r in enumerate(rows) if not _row_ok(r, time_column, accel_column))
-        raise ParameterError(f"{path}: data row {bad + 1}", ",".join(rows[bad]),
-                             f"numbers in columns {time_column + 1} and {accel_column + 1}") from None
+        sep = {";": "';'", ",": "','", None: "spaces"}[dialect]
+        raise ParameterError(f"{path}: data row {bad + 1}", (dialect or " ").join(rows[bad]),
+                             f"numbers in columns {time_column + 1} and {accel_column + 1} (separated by {sep}, as "
+                             "in the first data row)") from None
     if data.shape[0] < 3:
         raise ParameterError(f"{path}: data rows", data.shape[0], "at least 3 rows of finite numbers")
     if not np.all(np.isfinite(data)):
@@ -470,6 +485,14 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
     if not 0.1 <= ratio <= 10:
         notes.append(f"the measured pulse lasts {ratio:.3g} times the model's ({meas_pm.duration_10 * 1e3:.4g} ms "
                      f"against {top.duration_10 * 1e3:.4g} ms between 10 % points): check the time unit")
+    # g written as m/s^2 or the reverse: the velocity change (the area, whatever the shape) off by 9.81 (a
+    # review: +874 % peak and velocity change without a word, where a wrong time unit is noted)
+    dv_ratio = meas_pm.delta_v_main / model_pm.delta_v_main if model_pm.delta_v_main > 0 else math.nan
+    for factor, said, meant in ((G0, "g", "m/s^2"), (1 / G0, "m/s^2", "g")):
+        if abs(dv_ratio / factor - 1) < 0.15:
+            notes.append(f"the measured velocity change is {dv_ratio:.3g} times the model's, close to {factor:.4g} "
+                         f"(the ratio of g to m/s^2): check the acceleration unit (a record in {meant} read as "
+                         f"{said}? header or --accel-unit)")
     for who, pm in (("measured", meas_pm), ("model's", model_pm)):
         if pm.truncated:
             notes.append(f"the record's window cuts the {who} pulse: its duration and velocity change are measured "

@@ -102,7 +102,7 @@ def test_read_units_from_header_and_options(files):
     ("0,1\n1,2\n2,3\n", {"time_unit": "fortnight", "accel_unit": "g"}, "time unit"),
     ("time (ms), a (g)\n0,1\n1,nan\n2,3\n", {}, "data row 2"),
     ("time (ms), a (g)\n0,1\n1,2\n2,3\n", {"time_unit": "s"}, "the unit of column 'time (ms)'"),
-    ("time (ms), a (g)\n0,1\n1,2\n2,3\n", {"accel_unit": "m/s^2"}, "the unit of column ' a (g)'"),
+    ("time (ms), a (g)\n0,1\n1,2\n2,3\n", {"accel_unit": "m/s^2"}, "the unit of column 'a (g)'"),
 ])
 def test_bad_files_are_one_clear_error(tmp_path, text, kwargs, needle):
     p = tmp_path / "m.csv"
@@ -110,6 +110,39 @@ def test_bad_files_are_one_clear_error(tmp_path, text, kwargs, needle):
     with pytest.raises(ParameterError) as err:
         read_pulse_csv(p, **kwargs)
     assert needle in str(err.value) and "\n" not in str(err.value) and "np.float" not in str(err.value)
+
+
+def test_a_header_in_another_separator_and_a_row_of_units_are_read(tmp_path, files):
+    # a review: the docs' own `t [s]; a [m/s^2]` header over comma-separated rows, and the common export of
+    # names then units in two rows, were refused with a message about a data row
+    t, a = hertz_drop()
+    ref = read_pulse_csv(files / "clean.csv")
+    p = tmp_path / "mixed.csv"
+    np.savetxt(p, np.c_[t * 1e3, a], delimiter=",", header="t [ms]; a [g]", comments="")
+    r = read_pulse_csv(p)
+    np.testing.assert_array_equal(r.t, ref.t)
+    np.testing.assert_array_equal(r.a, ref.a)
+    p = tmp_path / "two_rows.csv"
+    np.savetxt(p, np.c_[t * 1e3, a], delimiter=",", header="time,acceleration\nms,g", comments="")
+    r = read_pulse_csv(p)
+    assert (r.time_unit, r.accel_unit) == ("ms", "g")
+    np.testing.assert_array_equal(r.t, ref.t)
+    np.testing.assert_array_equal(r.a, ref.a)
+    p.write_text("time (ms), a (g)\n0;1\n1;x\n2;3\n")
+    with pytest.raises(ParameterError, match=r"data row 2 = '1;x' is invalid: .*separated by ';'"):
+        read_pulse_csv(p)
+
+
+def test_an_acceleration_unit_off_by_g_is_noted(files, report, tmp_path):
+    """A record in g read as m/s^2 (and the reverse): its velocity change is 1/9.80665 (9.80665) times the
+    model's, whatever the pulse's shape; a note names the acceleration unit (the clean record: no note)."""
+    assert not any("acceleration unit" in n for n in compare(report, read_pulse_csv(files / "clean.csv")).notes)
+    for unit, ratio in (("m/s^2", 1 / G0), ("g", G0)):
+        t, a = hertz_drop()
+        np.savetxt(tmp_path / "u.csv", np.c_[t, a if unit == "m/s^2" else a * G0], delimiter=",")
+        c = compare(report, read_pulse_csv(tmp_path / "u.csv", time_unit="s", accel_unit=unit))
+        assert c.measured_metrics.delta_v_main / c.model_metrics.delta_v_main == pytest.approx(ratio, rel=1e-3)
+        assert any("check the acceleration unit" in n for n in c.notes), c.notes
 
 
 def test_a_header_unit_repeated_by_the_option_is_fine(files):
