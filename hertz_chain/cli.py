@@ -692,7 +692,7 @@ def fit(
         typer.echo("hertz-chain: warning: poor fit (see the POOR FIT notes): the values above are not a calibration",
                    err=True)
     if not result.status.ok:
-        typer.echo(f"hertz-chain: fit {result.status.text}: {_one_line(result.message)}"
+        typer.echo(f"hertz-chain: fit {result.status.text}: {_one_line(result.message).rstrip('.')}"
                    + ("" if "reported" in result.message else "; the last point is reported"), err=True)
         raise typer.Exit(code=result.status.exit_code)
 
