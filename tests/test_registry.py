@@ -28,6 +28,7 @@ def test_every_entry_point_reads_the_registry():
     for name, row in registry.LAWS.items():
         cls = getattr(contact, row.cls)
         assert cls.name == name and callable(cls.from_config)
+        assert cls.has_memory == row.memory, name  # the row and the class say the same (the state has a memory)
 
 
 def _file(law_lines: str, solver: str = "tsit5", gravity: str = "", radius: str = "") -> str:
