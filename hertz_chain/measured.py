@@ -360,8 +360,9 @@ def quiet_start(t, a) -> tuple[float, float, int]:
 
 def prepare_record(measured: MeasuredPulse, cfc: int | None = None) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """The measured record as :func:`compare` and `hertz_chain.fitting` use it, before any filter:
-    `(t, a, notes)` on a uniform grid (a non-uniform record resampled linearly at its mean rate, a
-    note naming any gap longer than 5 mean steps), with a negative-going record's sign flipped (a
+    `(t, a, notes)` on a uniform grid (a non-uniform record resampled linearly at its median step, so that
+    a uniform record with missing samples keeps its own samples, or at its mean step where the median
+    would make the record more than 4 times longer; a note naming any gap longer than 5 steps), with a negative-going record's sign flipped (a
     note). `cfc` only changes the note's wording (the filter is applied by the caller)."""
     t = np.asarray(measured.t, dtype=float)
     h = (t[-1] - t[0]) / (t.size - 1)
@@ -369,13 +370,20 @@ def prepare_record(measured: MeasuredPulse, cfc: int | None = None) -> tuple[np.
     dt = np.diff(t)
     uniform = np.max(np.abs(dt - h)) <= 1e-6 * h
     if not uniform:
-        t_u = t[0] + h * np.arange(t.size)
+        # the median step: a record on a uniform clock with samples missing keeps its own samples (a review:
+        # resampled at the mean rate, 246,662 Hz for a 250 kHz record, every sample was an interpolated one)
+        h_med = float(np.median(dt))
+        count = int(round((t[-1] - t[0]) / h_med)) + 1
+        kind = "median step" if count <= 4 * t.size else "mean step"
+        if kind == "median step":
+            h = (t[-1] - t[0]) / (count - 1)
+        t_u = t[0] + h * np.arange(int(round((t[-1] - t[0]) / h)) + 1)
         m_u = np.interp(t_u, t, measured.a)
-        notes.append(f"the measurement's times are not uniform: resampled linearly at its mean rate {1 / h:.6g} Hz"
+        notes.append(f"the measurement's times are not uniform: resampled linearly at its {kind} ({1 / h:.6g} Hz)"
                      + (" before the CFC filter" if cfc is not None else ""))
         if dt.max() > 5 * h:
             i = int(np.argmax(dt))
-            notes.append(f"the measurement has a gap of {dt[i] * 1e3:.4g} ms ({dt[i] / h:.3g} mean steps) after "
+            notes.append(f"the measurement has a gap of {dt[i] * 1e3:.4g} ms ({dt[i] / h:.3g} steps) after "
                          f"t = {t[i] * 1e3:.6g} ms: the resampled record is a straight line across it")
         t = t_u
     else:
@@ -422,8 +430,8 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
 
     **Returns:** a :class:`Comparison`.
 
-    A non-uniform record is resampled linearly at its mean rate first (a note says so, and names any gap
-    longer than 5 mean steps); a negative-going record is compared with its sign flipped (a note says
+    A non-uniform record is resampled linearly at its median step first (`prepare_record`; a note says so,
+    and names any gap longer than 5 steps); a negative-going record is compared with its sign flipped (a note says
     so); a note names a pulse that the record's window cuts, and a model run that did not complete
     (`Comparison.partial`).
 

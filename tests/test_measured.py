@@ -237,6 +237,20 @@ def test_non_uniform_record_with_cfc_is_resampled_and_a_gap_named(files, report,
     assert c.shift == pytest.approx(SHIFT, abs=1.5e-6)
 
 
+def test_a_record_with_missing_samples_keeps_its_own_samples():
+    # a 1 MHz record with 1 in 7 samples missing: resampled at its median step (1 us), every kept sample is
+    # unchanged (to the round-off of its time) and the missing ones interpolated (a review: at the mean rate,
+    # every sample moved)
+    from hertz_chain.measured import MeasuredPulse, prepare_record
+
+    t, a = hertz_drop()
+    keep = np.arange(t.size) % 7 != 3
+    tu, au, notes = prepare_record(MeasuredPulse(t[keep], a[keep] * G0))
+    assert any("median step (1e+06 Hz)" in n for n in notes), notes
+    np.testing.assert_allclose(tu, t, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(au[keep], a[keep] * G0, rtol=1e-12, atol=0)  # the same to round-off of t
+
+
 def test_time_unit_mistake_is_one_clear_error(files, report, tmp_path):
     """A record in s read as ms: the measured pulse lasts 1e-3 of the model's (a note; the noisy
     record's 10 % width is the model's within 3 %, the 1 % noise moving its 10 % crossings). A record in ms
