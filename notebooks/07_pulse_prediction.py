@@ -31,7 +31,7 @@
 # duration**, although the peak levels are reached from drops of a few centimetres and the SRS of the
 # short pulse covers that of a condition whenever its velocity change and peak are both larger. A
 # nylon cap lengthens the top pulse to 0.18–0.28 ms and the stack then **meets MIL-STD-883 condition E
-# (10,000 g, 0.2 ms) for drops of about 0.16–0.3 m**, pulse and SRS. All predictions are elastic:
+# (10,000 g, 0.2 ms) for drops of about 0.16–0.33 m**, pulse and SRS. All predictions are elastic:
 # the Hertz pressures exceed the yield onset of the materials (see the end), so real contacts will
 # flatten plastically, lowering the peaks and lengthening the pulses.
 
@@ -288,7 +288,7 @@ assert bs.ok.all()
 # the top contact is an isolated Hertz impact at the rigid approach speed `u_top` (Eqs 1–2) with the
 # pair's reduced mass `m*`, so `peak ≈ k δ_max^{3/2}/m_n` and the equivalent half-sine duration
 # `≈ π ΔV/(2 peak)` with `ΔV = (1 + e) u_top m*/m_n` (docs/references.md, "Hertz single impact" closed forms, nominal `e`). It
-# gives the simulated peak to within 2–28 % (it ignores the damping, which lowers the peak more at
+# gives the simulated peak to within 1–28 % (it ignores the damping, which lowers the peak more at
 # high speed) and the duration to within 4–14 %; the simulated pulses follow the Hertz scaling
 # `peak ∝ v^{6/5} ∝ h^{0.6}`, `duration ∝ h^{-0.1}` (fitted: `h^{0.56}`, `h^{-0.095}`: the viscoelastic
 # `e` falls with speed). The top mass's velocity change is checked exactly against the momentum of its

@@ -141,6 +141,8 @@ def threshold(pi, err, level):
     pi, err = pi[o], np.abs(err[o])
     good = np.isfinite(err)
     pi, err = pi[good], err[good]
+    if pi.size == 0:  # no finite deficit at this e (Eq 19's gain <= 0 there: rigid_deficit is NaN)
+        return np.nan
     bad = np.flatnonzero(err >= level)
     if bad.size == 0:
         return float(pi[0])
@@ -155,6 +157,9 @@ rows = []
 for k, e in enumerate(E):
     p1 = threshold(PI[:, k], err[:, k], 0.01)
     rows.append((e, p1, p1 * C[k]))
+    if np.isnan(p1):
+        print(f"e = {e:.1f}: no rigid gain to compare with (Eq 19's gain <= 0 at this e)")
+        continue
     print(f"e = {e:.1f}: Pi_1% = {p1:.3f}  (gap >= {p1 * C[k] * 1e3:.3f} mm for this stack at 1 m/s)")
 write_table("regime_map_pi1", ["restitution", "pi_1pct", "gap_1pct_m"], rows,
             ["notebooks/09_regime_map.py: six-mass MVG (R = 0.012, m_1 = 8.4 kg), Tsuji k = 1e9 N/m^1.5, 1 m/s, g = 0",

@@ -6,7 +6,8 @@ The notebooks are kept as jupytext percent-format `.py` files (reviewable diffs,
 this script reads each with jupytext, runs it with nbclient in this interpreter's `python3` kernel
 (working directory `notebooks/`) and writes `OUT/<name>.ipynb`, never overwriting a file that it did
 not ask about: an existing output is replaced only with `--force`. `--quick` sets `HERTZ_CHAIN_QUICK=1`
-(the coarse grids that the test suite uses). `make notebooks` runs all of them in full mode.
+(the coarse grids that the test suite uses). `make notebooks` runs all of them in full mode. A notebook
+that fails is written up to its failing cell and the others still run; the exit status is then 1.
 """
 
 from __future__ import annotations
@@ -45,13 +46,24 @@ def main(argv=None) -> int:
     env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}  # the kernel's inline backend
     if args.quick:
         env["HERTZ_CHAIN_QUICK"] = "1"
+    from nbclient.exceptions import CellExecutionError
+
+    failed = []
     for path, target in zip(paths, targets):
         print(f"running {path.name} ...", flush=True)
         nb = jupytext.read(path)
-        NotebookClient(nb, timeout=1800, kernel_name="python3",
-                       resources={"metadata": {"path": str(HERE)}}).execute(cwd=str(HERE), env=env)
+        try:
+            NotebookClient(nb, timeout=1800, kernel_name="python3",
+                           resources={"metadata": {"path": str(HERE)}}).execute(cwd=str(HERE), env=env)
+        except CellExecutionError as exc:  # the others still run; the failed one is written up to its error
+            failed.append(path.name)
+            last = [ln for ln in str(exc).strip().splitlines() if ln.strip()]
+            print(f"  FAILED: {last[-1] if last else exc}", file=sys.stderr, flush=True)
         nbformat.write(nb, target)
         print(f"  wrote {target}")
+    if failed:
+        print(f"execute.py: {len(failed)} notebook(s) failed: {', '.join(failed)}", file=sys.stderr)
+        return 1
     return 0
 
 
