@@ -81,7 +81,15 @@ class FitParameter:
     at_bound: bool
 
     def to_dict(self) -> dict:
-        return dataclasses.asdict(self)
+        """JSON-ready: a standard error that is not finite (a parameter the record does not move) is None
+        (`null`; `Infinity` is not JSON)."""
+        d = dataclasses.asdict(self)
+        d["standard_error"] = _finite_or_none(self.standard_error)
+        return d
+
+
+def _finite_or_none(x):
+    return float(x) if math.isfinite(x) else None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -125,7 +133,8 @@ class FitResult:
             "shift_s": self.shift, "shift_standard_error_s": self.shift_standard_error,
             "rms_residual_g": self.rms_residual_g, "samples": self.samples, "dof": self.dof,
             "poor_fit": self.poor,
-            "correlation": self.correlation.tolist(), "evaluations": self.evaluations, "seconds": self.seconds,
+            "correlation": [[_finite_or_none(c) for c in row] for row in np.asarray(self.correlation, dtype=float)],
+            "evaluations": self.evaluations, "seconds": self.seconds,
             "sprague_geers": {"start": sg(self.start), "fitted": sg(self.fitted)},
             "peak_g": {"measured": self.fitted.measured_metrics.peak_g, "start": self.start.model_metrics.peak_g,
                        "fitted": self.fitted.model_metrics.peak_g},
@@ -134,8 +143,8 @@ class FitResult:
 
     @property
     def poor(self) -> bool:
-        """True when a note says the fit is poor (worse than the start, a residual over 10 % of the peak,
-        or a standard error not below its value)."""
+        """True when a note says the fit is poor (worse than the start, a residual over twice the record's
+        noise or 10 % of the peak, or a standard error not below its value)."""
         return any(n.startswith("POOR FIT") for n in self.notes)
 
     def table(self) -> str:
@@ -412,7 +421,8 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
         J[:, -1] = (model.residual(run, shift + hs * width) - model.residual(run, shift - hs * width)) / (2 * hs)
         cache.clear()
         cache[key] = (r, J)
-        if not best or float(r @ r) < best["cost"]:
+        best["finished"] = best.get("finished", 0) + 1
+        if "cost" not in best or float(r @ r) < best["cost"]:
             best.update(cost=float(r @ r), theta=np.array(theta))
         return r, J
 
@@ -429,8 +439,12 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
         # start was reported, and written as "fitted", after a failure part-way)
         status, message = OptimizeStatus.FAILED, str(exc)
         theta = best.get("theta", theta0)
-        message += ("; the best point reached is reported" if "theta" in best and not np.array_equal(theta, theta0)
-                    else "; no point beyond the start finished: the start is reported")
+        if "theta" in best and not np.array_equal(theta, theta0):
+            message += "; the best point reached is reported"
+        elif best.get("finished", 0) > 1:
+            message += "; no finished point was better than the start: the start is reported"
+        else:
+            message += "; no point beyond the start finished: the start is reported"
     r, J = residual_and_jacobian(theta)
     N, p = r.size, theta.size
     dof = N - p
@@ -443,6 +457,8 @@ def fit(path, measured, vary=(), *, cfc: int | None = None, align: str = "xcorr"
     se_theta = np.where(col <= 1e-12 * max(float(col.max()), 1e-300), np.inf, se_theta)
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(se_theta, se_theta)
+    corr[~np.isfinite(se_theta), :] = np.nan  # an undetermined parameter: no correlation (not 0)
+    corr[:, ~np.isfinite(se_theta)] = np.nan
     x, shift = to_x(theta)
     se_x = np.where(log, x * se_theta[:-1], se_theta[:-1])
     params = []

@@ -140,16 +140,29 @@ def read_pulse_csv(path, *, time_unit: str | None = None, accel_unit: str | None
         except ValueError:
             return False
 
+    def is_unit(cell, table):
+        try:
+            _factor(cell.strip().strip("[]()"), table, "unit", "")
+            return True
+        except ParameterError:
+            return False
+
     header = None
     first, _ = split(lines[:1])
     if not numeric(first[0]):
         header, lines = [c.strip() for c in first[0]], lines[1:]
         below, _ = split(lines[:1])
         if below and not numeric(below[0]) and not any(_unit_of(h) for h in header):
-            # a second header row of units under the names (`time,accel` then `ms,g`): the columns' units
-            header = [f"{h} ({u.strip()})" if u.strip() else h for h, u in zip(header, below[0])] \
-                + header[len(below[0]):]
-            lines = lines[1:]
+            cells = [c.strip() for c in below[0]]
+            need_cols = max(time_column, accel_column) + 1
+            if len(cells) >= need_cols and is_unit(cells[time_column], TIME_UNITS) \
+                    and is_unit(cells[accel_column], ACCEL_UNITS):
+                # a second header row of units under the names (`time,accel` then `ms,g` or `[ms],[g]`)
+                header = [f"{h} ({u.strip('[]()')})" if u else h for h, u in zip(header, cells)] \
+                    + header[len(cells):]
+                lines = lines[1:]
+            elif any(_unit_of(c) for c in cells):  # a title line above the real header: the header
+                header, lines = cells, lines[1:]
     rows, dialect = split(lines)
     need = max(time_column, accel_column) + 1
     if header is not None and len(header) < need:
@@ -350,20 +363,43 @@ def quiet_start(t, a) -> tuple[float, float, int]:
     samples before the main pulse's 10 % start (`pulse_metrics`) less a quarter of its 10 % duration;
     `(nan, nan, count)` where fewer than `QUIET_MIN_SAMPLES` samples lie there (a record that starts at the
     impact). `a` upward-positive, as `prepare_record` returns it."""
-    t, a = np.asarray(t, dtype=float), np.asarray(a, dtype=float)
-    pm = pulse_metrics(t, a)
-    quiet = a[t < pm.t_start_10 - 0.25 * pm.duration_10]
+    quiet = _quiet_samples(t, a)
     if quiet.size < QUIET_MIN_SAMPLES:
         return float("nan"), float("nan"), int(quiet.size)
     return float(quiet.mean()), float(quiet.std(ddof=1)), int(quiet.size)
+
+
+def _quiet_samples(t, a) -> np.ndarray:
+    """The samples of `quiet_start`."""
+    t, a = np.asarray(t, dtype=float), np.asarray(a, dtype=float)
+    pm = pulse_metrics(t, a)
+    return a[t < pm.t_start_10 - 0.25 * pm.duration_10]
+
+
+def _independent_samples(x) -> float:
+    """The effective number of independent samples of a noise record, `n / tau`, `tau = 1 + 2 sum rho_k`
+    over the lags whose autocorrelation `rho_k` stays positive (Geyer's initial positive sequence): a
+    channel sampled above its anti-alias bandwidth has correlated neighbours, and the mean of its quiet
+    start scatters by `std / sqrt(n / tau)`, not `std / sqrt(n)` (a review: with `sqrt(n)`, a band-limited
+    zero-mean record was called offset in 12-15 % of seeds)."""
+    x = np.asarray(x, dtype=float) - np.mean(x)
+    n = x.size
+    spec = np.fft.rfft(x, 2 * n)
+    acf = np.fft.irfft(spec * np.conj(spec))[:n]
+    if acf[0] <= 0:
+        return float(n)
+    rho = (acf / acf[0])[1 : max(n // 2, 2)]
+    stop = int(np.argmax(rho <= 0)) if np.any(rho <= 0) else rho.size  # the first lag that is not positive
+    return n / (1.0 + 2.0 * float(np.sum(rho[:stop])))
 
 
 def prepare_record(measured: MeasuredPulse, cfc: int | None = None) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """The measured record as :func:`compare` and `hertz_chain.fitting` use it, before any filter:
     `(t, a, notes)` on a uniform grid (a non-uniform record resampled linearly at its median step, so that
     a uniform record with missing samples keeps its own samples, or at its mean step where the median
-    would make the record more than 4 times longer; a note naming any gap longer than 5 steps), with a negative-going record's sign flipped (a
-    note). `cfc` only changes the note's wording (the filter is applied by the caller)."""
+    would make the record more than 4 times longer; a note naming any gap longer than 5 steps), with a
+    negative-going record's sign flipped (a note), and a note where its quiet start (`quiet_start`) shows
+    an offset. `cfc` only changes the notes' wording (the filter is applied by the caller)."""
     t = np.asarray(measured.t, dtype=float)
     h = (t[-1] - t[0]) / (t.size - 1)
     notes = list(measured.notes)
@@ -388,7 +424,8 @@ def prepare_record(measured: MeasuredPulse, cfc: int | None = None) -> tuple[np.
         t = t_u
     else:
         m_u = np.asarray(measured.a, dtype=float)
-    if pulse_metrics(t, m_u).sign < 0:
+    flipped = pulse_metrics(t, m_u).sign < 0
+    if flipped:
         m_u = -m_u
         notes.append("the measured pulse is negative-going (its largest excursion is below zero): it is compared "
                      "with its sign flipped, as the model's top pulse is positive (upward acceleration)")
@@ -397,10 +434,12 @@ def prepare_record(measured: MeasuredPulse, cfc: int | None = None) -> tuple[np.
     # peak
     mean, std, count = quiet_start(t, m_u)
     peak = float(np.max(m_u))
-    if count and np.isfinite(mean) and abs(mean) > max(4 * std / np.sqrt(count), 1e-3 * peak):
-        notes.append(f"the record's quiet start ({count} samples before the pulse) averages {mean / G0:.4g} g "
-                     f"({100 * mean / peak:+.2f} % of the peak), not 0: an offset of the channel shifts the "
-                     "velocity change and biases a fit; subtract it (the pre-trigger mean) first")
+    if count and np.isfinite(mean) and abs(mean) > 1e-3 * peak:
+        if abs(mean) > 4 * std / np.sqrt(_independent_samples(_quiet_samples(t, m_u))):
+            own = -mean if flipped else mean  # in the file's own sign (a review: the flipped one misled)
+            notes.append(f"the record's quiet start ({count} samples before the pulse) averages {own / G0:.4g} g "
+                         f"in the file ({100 * own / peak:+.2f} % of the peak), not 0: an offset of the channel "
+                         "shifts the velocity change and biases a fit; subtract it (the pre-trigger mean) first")
     return t, m_u, notes
 
 
@@ -495,9 +534,11 @@ def compare(report, measured: MeasuredPulse, *, cfc: int | None = None, align: s
                      f"against {top.duration_10 * 1e3:.4g} ms between 10 % points): check the time unit")
     # g written as m/s^2 or the reverse: the velocity change (the area, whatever the shape) off by 9.81 (a
     # review: +874 % peak and velocity change without a word, where a wrong time unit is noted)
+    # both the velocity change and the peak (a wrong drop height moves the peak as v^1.2, the change as v)
     dv_ratio = meas_pm.delta_v_main / model_pm.delta_v_main if model_pm.delta_v_main > 0 else math.nan
+    pk_ratio = meas_pm.peak_g / model_pm.peak_g if model_pm.peak_g > 0 else math.nan
     for factor, said, meant in ((G0, "g", "m/s^2"), (1 / G0, "m/s^2", "g")):
-        if abs(dv_ratio / factor - 1) < 0.15:
+        if abs(dv_ratio / factor - 1) < 0.15 and abs(pk_ratio / factor - 1) < 0.15:
             notes.append(f"the measured velocity change is {dv_ratio:.3g} times the model's, close to {factor:.4g} "
                          f"(the ratio of g to m/s^2): check the acceleration unit (a record in {meant} read as "
                          f"{said}? header or --accel-unit)")

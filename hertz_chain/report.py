@@ -317,8 +317,13 @@ def _metadata(meta: dict | None, report: Report | None = None) -> dict:
     now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
     # shlex.join: a review found `--set solver.t_max="10 ms"` recorded as `--set solver.t_max=10 ms`, which
     # does not run again
-    command = (shlex.join(["hertz-chain", *sys.argv[1:]]) if sys.argv and "hertz-chain" in sys.argv[0]
-               else "hertz_chain")
+    argv0 = Path(sys.argv[0]) if sys.argv and sys.argv[0] else Path()
+    if "hertz-chain" in argv0.name:
+        command = shlex.join(["hertz-chain", *sys.argv[1:]])
+    elif argv0.parent.name == "hertz_chain" and argv0.name in ("__main__.py", "cli.py"):  # python -m hertz_chain
+        command = shlex.join(["python", "-m", "hertz_chain", *sys.argv[1:]])
+    else:
+        command = "hertz_chain"
     out = {"title": meta.get("title") or "hertz_chain simulation", "source_file": meta.get("source_file") or "",
            "version": f"hertz_chain {__version__}", "history": f"{now} {command}"}
     # the input as it was read (a review: a bare file name, no way to tell later which stack a file came

@@ -62,7 +62,7 @@ def srs_options(spec: StackSpec):
 def simulate_file(path: str | Path) -> Report:
     """Read, simulate and analyse a stack file. The report keeps the file's title and path
     (`Report.title`, `Report.source_file`), which `report.write_output` records."""
-    return dataclasses.replace(run_spec(load_stack_file(path)), source_file=str(path))
+    return dataclasses.replace(run_spec(load_stack_file(path)), source_file=str(Path(path).resolve()))
 
 
 def design_report(*, ratio=None, m1=None, mn=None, e):

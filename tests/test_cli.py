@@ -127,6 +127,13 @@ def test_python_dash_m_runs_the_command_line(tmp_path, module):
     path.write_text(BAD["units"])
     bad = subprocess.run([sys.executable, "-m", module, "simulate", str(path)], capture_output=True, text=True)
     assert bad.returncode == 2 and "Traceback" not in bad.stderr and "stack.gaps" in bad.stderr
+    if module == "hertz_chain":  # its exports record the command as run (was the bare word "hertz_chain")
+        example = Path(__file__).resolve().parents[1] / "examples" / "fit_drop.toml"
+        out = tmp_path / "run.csv"
+        run = subprocess.run([sys.executable, "-m", module, "simulate", str(example), "--output", str(out)],
+                             capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        assert f"python -m hertz_chain simulate {example} --output {out}" in out.read_text().splitlines()[2]
 
 
 def test_design_command():

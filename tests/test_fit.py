@@ -137,6 +137,34 @@ def test_an_offset_record_is_noted():
     assert mean == pytest.approx(0.005 * peak, abs=4 * sigma / math.sqrt(200))
 
 
+def test_an_offset_is_judged_against_correlated_noise_and_given_in_the_files_sign():
+    """Zero-mean noise low-passed at 20 kHz (4-pole Butterworth, as a channel's anti-alias filter) on the
+    1 MHz record: neighbouring samples are correlated, so the quiet start's mean scatters more than
+    std/sqrt(n); over 20 seeds no offset note (a review: 12-15 % false notes with sqrt(n)). A negative-going
+    record with +0.5 % of the peak added in the file: the note gives the file's own sign and size."""
+    from scipy import signal
+
+    from hertz_chain.measured import MeasuredPulse, prepare_record
+
+    t, a, _ = measurement(0.0)
+    peak = float(a.max())
+    sos = signal.butter(4, 20e3, fs=1e6, output="sos")
+    for seed in range(20):
+        noisy = signal.sosfilt(sos, a + 0.01 * peak * np.random.default_rng(seed).standard_normal(a.size))
+        assert not any("quiet start" in n for n in prepare_record(MeasuredPulse(t, noisy * G))[2]), seed
+    rec = -a + 0.005 * peak + 0.001 * peak * np.random.default_rng(0).standard_normal(a.size)
+    note = next(n for n in prepare_record(MeasuredPulse(t, rec * G))[2] if "quiet start" in n)
+    assert float(note.split("averages ")[1].split(" g")[0]) == pytest.approx(0.005 * peak, rel=0.05)
+
+
+def test_an_undetermined_parameter_is_null_in_json():
+    # a standard error that is not finite (a parameter the record does not move) is JSON null, not Infinity
+    from hertz_chain.fitting import FitParameter
+
+    d = FitParameter("contact.stiffness[0]", "N/m^1.5", 1e9, 1e9, math.inf, (1e7, 1e11), False).to_dict()
+    assert d["standard_error"] is None and json.loads(json.dumps(d, allow_nan=False))["value"] == 1e9
+
+
 def test_a_fit_that_fails_part_way_reports_the_best_point_not_the_start(files, tmp_path, monkeypatch):
     """A search that fails part-way (a review: the start was reported, and written as "fitted", whatever the
     search had reached). (1) A step budget of the start's own run at the fit's tolerances plus 5 steps: the

@@ -128,6 +128,17 @@ def test_a_header_in_another_separator_and_a_row_of_units_are_read(tmp_path, fil
     assert (r.time_unit, r.accel_unit) == ("ms", "g")
     np.testing.assert_array_equal(r.t, ref.t)
     np.testing.assert_array_equal(r.a, ref.a)
+    body = "\n".join(f"{float(x)!r},{float(y)!r}" for x, y in zip(t * 1e3, a))
+    for units in ("ms,g", "[ms],[g]", "(ms),(g)"):  # a row of units, bracketed or not
+        p.write_text(f"time,acceleration\n{units}\n" + body)
+        r = read_pulse_csv(p)
+        assert (r.time_unit, r.accel_unit) == ("ms", "g")
+        np.testing.assert_array_equal(r.t, ref.t)
+    p.write_text("Drop test 12\ntime (ms),acceleration (g)\n" + body)
+    np.testing.assert_array_equal(read_pulse_csv(p).a, ref.a)  # a title line above the header
+    p.write_text("time,acceleration\n0.0,ovf\n1,2\n2,3\n3,4\n")  # a bad cell is not a row of units
+    with pytest.raises(ParameterError, match=r"data row 1 = '0.0,ovf' is invalid"):
+        read_pulse_csv(p, time_unit="ms", accel_unit="g")
     p.write_text("time (ms), a (g)\n0;1\n1;x\n2;3\n")
     with pytest.raises(ParameterError, match=r"data row 2 = '1;x' is invalid: .*separated by ';'"):
         read_pulse_csv(p)
@@ -143,6 +154,19 @@ def test_an_acceleration_unit_off_by_g_is_noted(files, report, tmp_path):
         c = compare(report, read_pulse_csv(tmp_path / "u.csv", time_unit="s", accel_unit=unit))
         assert c.measured_metrics.delta_v_main / c.model_metrics.delta_v_main == pytest.approx(ratio, rel=1e-3)
         assert any("check the acceleration unit" in n for n in c.notes), c.notes
+
+
+def test_a_record_from_another_drop_height_is_not_called_a_unit_mistake(files, report, tmp_path):
+    """A Hertz impact 10 times faster (a drop 100 times higher): its velocity change is 10 times the model's,
+    near 9.81, but its peak 10^1.2 = 15.8 times (peak ~ v^(6/5), duration ~ v^(-1/5): Hertz's similarity,
+    Johnson 1985): no acceleration-unit note."""
+    t, a = hertz_drop()
+    t0 = SHIFT
+    fast = 10.0 ** 1.2 * np.interp(t0 + (t - t0) * 10.0 ** 0.2, t, a, right=0.0)
+    np.savetxt(tmp_path / "fast.csv", np.c_[t, fast], delimiter=",", header="time (s), a (g)", comments="")
+    c = compare(report, read_pulse_csv(tmp_path / "fast.csv"))
+    assert c.measured_metrics.delta_v_main / c.model_metrics.delta_v_main == pytest.approx(10.0, rel=0.02)
+    assert not any("acceleration unit" in n for n in c.notes), c.notes
 
 
 def test_a_header_unit_repeated_by_the_option_is_fine(files):

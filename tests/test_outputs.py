@@ -106,7 +106,7 @@ def test_a_report_of_a_stack_file_exported_from_python_keeps_its_title_and_sourc
     # hc.simulate_file's report carries the file's title and path: write_output without `meta` records
     # them (a review: the default title and no input file); `meta` still overrides
     report, d, path = run
-    assert report.title == "one sphere on a Hertz ground, sampled every microsecond" and report.source_file == str(path)
+    assert report.title == "one sphere on a Hertz ground, sampled every microsecond" and report.source_file == str(path.resolve())
     write_output(report, d / "own.nc")
     write_output(report, d / "own.csv")
     with xr.open_dataset(d / "own.nc", engine="h5netcdf") as ds:
