@@ -117,7 +117,7 @@ from ._solve import (  # noqa: F401  (`_scaled_field`: the benchmarks' scipy com
 from ._solver import UNTIL, Tolerances, UnrolledTsit5, _SolveConfig, _make_adjoint, make_solver
 from .contact import AbstractContactLaw
 from .errors import ParameterError, SolverError, check_positive
-from .stack import Stack, State, at_impact
+from .stack import Stack, State, _is_concrete, at_impact
 from .status import Status
 
 __all__ = [
@@ -173,6 +173,7 @@ def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, sa
     if not isinstance(state, State):
         raise ParameterError("state", type(state).__name__, "a hertz_chain.State (at_impact, dropped, resting)")
     _check_state_shape(stack, state)
+    _check_wall_beyond_the_chain(stack, state)
     if until != "t_max" and (stack.wall or (not isinstance(stack.end_force, jax.core.Tracer) and stack.held)):
         raise ParameterError("until", until, "'t_max' (with a t_max) for a chain held by an end force or a wall: "
                              "it never flies apart, so no cascade ends")
@@ -204,6 +205,19 @@ def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, sa
             raise ParameterError("ts", f"last time {ts_np[-1]}", f"<= t_max = {t_max}")
         ts = jnp.asarray(ts_np)
     return ts, t_max, _config_for(solver, tolerances, int(max_steps), adjoint, save_steps, until)
+
+
+def _check_wall_beyond_the_chain(stack, state) -> None:
+    """A far wall lies beyond mass n-1 at the start (`Stack.wall_position` in the top mass's coordinate): the
+    stack file refuses a negative `wall.gap`, but from Python a wall placed inside the chain ran (the top
+    mass starting deep inside the wall). Concrete values only; a precompressed chain's top mass may start
+    pressed into the wall."""
+    if not stack.wall or stack.n < 2 or not _is_concrete(stack.wall_position, state.positions):
+        return
+    xw, below = np.asarray(stack.wall_position), np.asarray(state.positions)[..., -2]
+    if np.any(xw <= below):
+        raise ParameterError("wall_position", np.asarray(xw).tolist(), f"beyond mass {stack.n - 1}'s starting "
+                             f"position ({np.max(below):.6g} m): the far wall closes the chain above the top mass")
 
 
 _CONFIGS: dict = {}  # the solve configurations made, by their options (a repeated call builds none: ~0.1 ms)
