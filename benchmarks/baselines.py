@@ -10,8 +10,12 @@ as a numba `@njit` right-hand side, checked against the library's own scaled vec
 - numbalsoda (compiled LSODA with a numba cfunc), when it installs from the registry (it ships as source
   only and must build its C++ core: `NUMBALSODA` says whether it did);
 - a plain numba Tsit5 loop with the library's step-size controller (diffrax's `PIDController` with
-  `pcoeff = 0.4`, `icoeff = 0.3`, the library's first and largest steps, the same RMS error norm), the
-  compiled-code floor, checked to give the library's launch velocity to 1e-9 with the same step count.
+  `pcoeff = 0.4`, `icoeff = 0.3`, the library's first and largest steps, the same RMS error norm, the
+  flight bound), the compiled-code floor. It does not land contact onsets on step ends
+  (`Tolerances.land_onsets`, on by default in the library): at the same rtol it takes more steps (15-25 %
+  at 1e-10) and, across an onset, can be less accurate; so the single solves are compared at matched
+  accuracy, and the cost per step is reported beside them (`per_step_us_at_1e-10`). At rtol 1e-10 it gives
+  the library's launch velocity to ~1e-9.
 
 Every method runs to the reference solution's end time (`t_final` of a tight library solve: with g = 0
 every velocity is constant after it, so the top mass's velocity there is its launch velocity, as in
@@ -245,12 +249,15 @@ def tsit5_batch(Y0, T1, rtol, atol, max_step, first_step, M, K, C, S, T, A, B, E
     return top, steps
 
 
-def batched(quick: bool, designs: int = 1024, rtol: float = 1e-9) -> dict:
-    """Throughput on many designs of one structure: `hc.simulate_batch(save_steps=False)` (vmapped,
-    split over the CPU devices) against `tsit5_batch` (numba, `prange` over designs), five-mass gapped
-    Tsuji stacks whose interior masses are the MVG masses times a random factor in [0.8, 1.2], the same
-    `rtol = atol`, each numba design run to the library's own end time for it. Times are medians after
-    compilation; the agreement is the largest relative difference of the top launch velocities."""
+def batched(quick: bool, designs: int = 1024) -> dict:
+    """Throughput on many designs of one structure at matched accuracy: `hc.simulate_batch(save_steps=False)`
+    (vmapped, split over the CPU devices) against `tsit5_batch` (numba, `prange` over designs), five-mass
+    gapped Tsuji stacks whose interior masses are the MVG masses times a random factor in [0.8, 1.2]. The
+    reference is the library's batch at rtol = atol = 1e-13; each method runs at the loosest rtol of a
+    ladder whose LARGEST relative error of the top launch velocity over the designs is <= `MATCH` and stays
+    so at the next tighter rtol (`find_matched`: an equal rtol favoured the library, whose onset landing the
+    numba loop lacks: at 1e-9 its worst design was 3e-6 off, the library's 2e-8); every numba design runs to
+    the reference's end time for it. Times are medians after compilation, the two in alternation."""
     import jax
 
     designs = 128 if quick else designs
@@ -273,33 +280,58 @@ def batched(quick: bool, designs: int = 1024, rtol: float = 1e-9) -> dict:
                      float(sc.velocity), np.asarray(state.flat(), dtype=float)))
     batch_stack = hc.stack_designs(stacks)
     batch_state = jax.tree.map(lambda *x: np.stack(x), *states)
-    tol = hc.Tolerances(rtol=rtol, atol=rtol)
 
-    def run_lib():
-        return jax.block_until_ready(hc.simulate_batch(batch_stack, batch_state, tolerances=tol, save_steps=False,
-                                                       max_steps=16384))
+    def lib_at(rtol):
+        tol = hc.Tolerances(rtol=rtol, atol=rtol)
+        return lambda: jax.block_until_ready(hc.simulate_batch(batch_stack, batch_state, tolerances=tol,
+                                                               save_steps=False, max_steps=65536))
 
-    sol = run_lib()
-    lib_top = np.asarray(sol.launch_velocities)[:, -1]
-    t_end = np.asarray(sol.t_final)
+    ref = lib_at(1e-13)()
+    ref_top = np.asarray(ref.launch_velocities)[:, -1]
+    t_end = np.asarray(ref.t_final)
     M, K, C, S, T, V, Y = (np.stack([a[i] for a in args]) for i in range(7))
     Y0 = np.concatenate([Y / S, np.zeros((designs, 5))], axis=1)  # with the onset proxies, as the library
     S_p = np.concatenate([S, np.ones((designs, 5))], axis=1)[:, : 3 * 5]
     T1 = t_end / T
 
-    def run_nb():
-        return tsit5_batch(Y0, T1, rtol, rtol, MAX_STEP, FIRST_STEP, M, K, C, S_p, T, _A, _B, _E)
+    def nb_at(rtol):
+        return lambda: tsit5_batch(Y0, T1, rtol, rtol, MAX_STEP, FIRST_STEP, M, K, C, S_p, T, _A, _B, _E)
 
-    top, nb_steps = run_nb()
-    nb_top = top * V
-    times = interleaved_medians({"lib": run_lib, "nb": run_nb}, 3 if quick else 7, warmup=0, budget_s=120.0)
-    lib_t, nb_t = times["lib"], times["nb"]
-    return dict(designs=designs, rtol=rtol, devices=len(jax.devices()), threads=int(os.environ.get("NUMBA_NUM_THREADS",
-                os.cpu_count() or 1)), library_ms_per_design=1e3 * lib_t / designs,
-                numba_ms_per_design=1e3 * nb_t / designs, ratio=lib_t / nb_t,
-                agreement=float(np.max(np.abs(nb_top - lib_top) / np.abs(lib_top))),
-                agreement_median=float(np.median(np.abs(nb_top - lib_top) / np.abs(lib_top))),
-                steps_library=float(np.mean(np.asarray(sol.num_steps))), steps_numba=float(np.mean(nb_steps)))
+    memo: dict = {}
+
+    def getter(kind):
+        def get(rtol):
+            if (kind, rtol) not in memo:
+                if kind == "library":
+                    sol = lib_at(rtol)()
+                    top, steps, ok = np.asarray(sol.launch_velocities)[:, -1], np.asarray(sol.num_steps), \
+                        bool(np.all(sol.ok))
+                else:
+                    top, steps = nb_at(rtol)()
+                    top, ok = top * V, True
+                err = np.abs(top - ref_top) / np.abs(ref_top)
+                memo[(kind, rtol)] = dict(ok=ok, err=float(np.max(err)), median_err=float(np.median(err)),
+                                          steps=float(np.mean(steps)), rtol=rtol)
+            return memo[(kind, rtol)]
+        return get
+
+    grid = fine_grid(1e-6, 1e-12)
+    rows = {kind: find_matched(getter(kind), grid, MATCH) for kind in ("library", "numba")}
+    out = dict(designs=designs, match=MATCH, devices=len(jax.devices()), threads=_numba_threads(),
+               equal_rtol_1e_9={kind: getter(kind)(1e-9) for kind in ("library", "numba")})
+    if rows["library"] is None or rows["numba"] is None:
+        return dict(out, ok=False, rows=rows)
+    times = interleaved_medians({"library": lib_at(rows["library"]["rtol"]), "numba": nb_at(rows["numba"]["rtol"])},
+                                3 if quick else 7, budget_s=120.0)
+    for kind in rows:
+        rows[kind]["ms_per_design"] = 1e3 * times[kind] / designs
+    return dict(out, ok=True, rows=rows, ratio=times["library"] / times["numba"])
+
+
+def _numba_threads() -> int:
+    import numba
+
+    return int(numba.get_num_threads())
 
 
 # ============================================================================ the JAX floor
@@ -526,10 +558,13 @@ def run_case(n: int, regime: str, quick: bool) -> dict:
                            max_steps=steps_budget(lib["steps"]))
     import jax
 
-    t_lib = median_time(lambda: jax.block_until_ready(lv(c.stack, c.state)), 25, budget_s=3.0)
+    # the three timed in alternation (a shared machine's load falls on them alike), warm blocks as above
+    t = interleaved_medians({"library": lambda: jax.block_until_ready(lv(c.stack, c.state)),
+                             "jax": c.call("jax-tsit5", jx), "numba": c.call("numba-tsit5", nb)},
+                            5 if quick else 15, block=5, budget_s=6.0)
     out["numba_from_jax_at_1e-10"] = c.numba_from_jax_us(1e-10)
-    out["per_step_us_at_1e-10"] = {"library": 1e6 * t_lib / lib["steps"], "jax": 1e6 * jx["time"] / jx["steps"],
-                                   "numba": 1e6 * nb["time"] / nb["steps"]}
+    out["per_step_us_at_1e-10"] = {"library": 1e6 * t["library"] / lib["steps"],
+                                   "jax": 1e6 * t["jax"] / jx["steps"], "numba": 1e6 * t["numba"] / nb["steps"]}
     out["rows"] = rows
     return out
 
@@ -615,17 +650,50 @@ def _write(data: dict, path: str | None) -> None:
                   f"{fc['prepared_cold_per_step_us']:.2f} us."]
     bt = data.get("batched")
     if bt:
-        lines += ["", "## Many designs at once", "",
-                  f"{bt['designs']} five-mass gapped Tsuji stacks (interior masses the MVG masses x U[0.8, 1.2]), "
-                  f"rtol = atol = {bt['rtol']:.0e}: `hc.simulate_batch(save_steps=False)` on {bt['devices']} CPU "
-                  f"device(s) against the numba Tsit5 loop with `prange` over designs on {bt['threads']} thread(s), "
-                  "each numba design run to the library's end time for it.", "",
-                  "| method | ms per design | mean steps |", "|---|---|---|",
-                  f"| hertz_chain `simulate_batch` | {bt['library_ms_per_design']:.3f} | {bt['steps_library']:.0f} |",
-                  f"| numba Tsit5, `prange` | {bt['numba_ms_per_design']:.3f} | {bt['steps_numba']:.0f} |", "",
-                  f"hertz_chain / numba: {bt['ratio']:.2f}; top launch velocities agree to {bt['agreement']:.1e} "
-                  f"(median {bt['agreement_median']:.1e}; the two step sequences part by rounding, each within its "
-                  "tolerance)."]
+        lines += ["", "## Many designs at once (matched accuracy)", "",
+                  f"{bt['designs']} five-mass gapped Tsuji stacks (interior masses the MVG masses x U[0.8, 1.2]): "
+                  f"`hc.simulate_batch(save_steps=False)` on {bt['devices']} CPU device(s) against the numba Tsit5 "
+                  f"loop with `prange` over designs on {bt['threads']} thread(s). Each at the loosest rtol whose "
+                  f"largest relative error of the top launch velocity over all designs is <= {bt['match']:.0e} "
+                  "against the library's batch at 1e-13 (and stays so at the next tighter rtol); every numba "
+                  "design runs to the reference's end time for it; the two timed in alternation.", ""]
+        if bt.get("ok"):
+            lines += ["| method | rtol | largest error | median error | mean steps | ms per design |",
+                      "|---|---|---|---|---|---|"]
+            for kind, label in (("library", "hertz_chain `simulate_batch`"), ("numba", "numba Tsit5, `prange`")):
+                r = bt["rows"][kind]
+                lines.append(f"| {label} | {r['rtol']:.0e} | {r['err']:.1e} | {r['median_err']:.1e} | "
+                             f"{r['steps']:.0f} | {r['ms_per_design']:.3f} |")
+            lines += ["", f"hertz_chain / numba: {bt['ratio']:.2f} (below 1: hertz_chain faster)."]
+        else:
+            lines.append("One of the two did not reach the accuracy on the ladder: " + ", ".join(
+                f"{k}: {'no rtol' if r is None else r['rtol']}" for k, r in bt["rows"].items()))
+        eq = bt["equal_rtol_1e_9"]
+        lines += ["", f"At an equal rtol of 1e-9 (the comparison before 2026-11-28): largest errors "
+                  f"{eq['library']['err']:.1e} (hertz_chain) and {eq['numba']['err']:.1e} (numba), mean steps "
+                  f"{eq['library']['steps']:.0f} and {eq['numba']['steps']:.0f}: the numba loop does not land "
+                  "onsets, so at one rtol it takes more steps and misses more."]
+    # the issue's targets, from this run where measured here
+    lines += ["", "## Targets of issue 22 (this run)", "", "| target | measured | verdict |", "|---|---|---|"]
+    for case in data["cases"]:
+        rows = case["rows"]
+        lib, nb = rows.get("library", {}), rows.get("numba-tsit5", {})
+        if lib.get("ok") and nb.get("ok"):
+            ratio = lib["time"] / nb["time"]
+            ps = case["per_step_us_at_1e-10"]
+            lines.append(f"| single n={case['n']} {case['regime']} solve within 1.5x of the numba loop | "
+                         f"{ratio:.2f}x at matched accuracy ({lib['steps']} against {nb['steps']} steps); "
+                         f"{ps['library'] / ps['numba']:.2f}x per step | {'met' if ratio <= 1.5 else 'not met'} |")
+    if fc:
+        warm, cold = fc["prepared_fixed_us"], fc["prepared_cold_fixed_us"]
+        lines.append(f"| fixed cost per call of a prepared callable under 50 us | {warm:.0f} us warm (the same solve "
+                     f"again), {cold:.0f} us cold (after another program) | "
+                     f"{'met' if warm < 50 else 'not met'} warm, {'met' if cold < 50 else 'not met'} cold |")
+    if bt and bt.get("ok"):
+        lines.append(f"| batched five-mass designs at least as fast as numba `prange` | {bt['ratio']:.2f}x at matched "
+                     f"accuracy | {'met' if bt['ratio'] <= 1.0 else 'not met'} |")
+    lines += ["| long chains: cost per step linear in n to 1,000 | `benchmarks/long_chains.md` | see there |",
+              "| gradient cost relative to a solve not growing | `benchmarks/results.md`, \"Gradient\" | see there |"]
     lines += ["", "Checks: the numba field equals the library's scaled field at random states (largest relative "
               "difference per case below); the numba Tsit5 loop gives the library's launch velocity at rtol 1e-10.", ""]
     for case in data["cases"]:

@@ -587,8 +587,9 @@ def _launch_impl(stack, state, t_max, cfg, replay):
 
 
 _NOT_ENDED = ("hertz_chain.launch_velocity: the cascade did not end (t_max or max_steps reached, no contact, "
-              "or a non-finite state); raise t_max or max_steps, or check the design (masses > 0 and the laws' "
-              "parameters: traced, they are not checked before the solve)")
+              "or a non-finite state), or the traced design breaks a rule (masses finite and > 0, gravity >= 0, "
+              "each law's parameters, e.g. a stiffness > 0: traced, they are checked only here, after the "
+              "solve); raise t_max or max_steps, or check the design")
 
 
 _LAST_ENDED = int(Status.COMPLETE_WITH_REBOUNDS)
@@ -616,8 +617,23 @@ def _checked(v, status, replay=False, design=None):
                               + ("; the design's numbers were traced (jax.grad, jax.vmap), so the checks of "
                                  "masses > 0 and the laws' parameters could not run: check them too" if traced else ""))
         return v
-    bad = status > _LAST_ENDED
+    # a traced design whose numbers break the rules its concrete checks enforce (a review: a stiffness of 0
+    # under jit gave NaN and, differentiated, a gradient of zeros, with the cascade reported complete)
+    bad = (status > _LAST_ENDED) | (_design_invalid(*design) if design is not None else False)
     return _guard_reverse(v, bad) if replay == "reverse" else _guard_forward(v, bad)
+
+
+def _design_invalid(stack, state):
+    """Under a trace: whether the design's numbers break a rule that `Stack`, `State` and the laws' own
+    checks (`AbstractContactLaw.field_rules`) enforce on concrete values: masses finite and > 0, gravity
+    finite and >= 0, each law parameter within its rule, a finite initial state (a traced bool)."""
+    bad = ~jnp.all(jnp.isfinite(stack.masses) & (stack.masses > 0))
+    bad |= ~(jnp.isfinite(stack.gravity) & (stack.gravity >= 0))
+    for law in stack.laws:
+        for field, (lowest, strict, _) in law.field_rules.items():
+            a = jnp.asarray(getattr(law, field))
+            bad |= ~jnp.all(jnp.isfinite(a) & ((a > lowest) if strict else (a >= lowest)))
+    return bad | ~jnp.all(jnp.isfinite(state.positions) & jnp.isfinite(state.velocities))
 
 
 @jax.custom_vjp

@@ -410,6 +410,23 @@ def test_a_failed_solve_raises_through_the_callers_derivatives():
     assert np.isnan(g[0])
 
 
+def test_a_traced_design_that_breaks_a_rule_raises_under_jit():
+    """A review: a stiffness of 0 traced through the caller's `jit` gave a NaN launch velocity and, under
+    `jax.grad`, a gradient of zeros, the run reported complete (the law's own check cannot see a traced
+    value). Now the guard after the solve also checks the traced design's rules (masses, gravity, each law's
+    `field_rules`): the same compiled gradient raises at k = 0 and is finite at k = 1e9."""
+    tol = Tolerances(rtol=1e-8, atol=1e-8)
+
+    def top(k):
+        stack = Stack(jnp.asarray([1.0, 0.3]), Hertz(k), gravity=0.0)
+        return hc.launch_velocity(stack, at_impact(stack, 1.0, 1e-3), tolerances=tol)[-1]
+
+    grad = jax.jit(jax.grad(top))
+    assert np.isfinite(float(grad(1e9)))
+    with pytest.raises(Exception, match="the traced design breaks a rule"):
+        float(grad(0.0))
+
+
 def test_parameters_past_the_checks_fail_instead_of_returning_nan():
     """A negative mass set past `Stack`'s checks (`eqx.tree_at`, or a traced value) gives a non-finite
     launch velocity: the run is `failed` (not `complete` with NaN), and the launch functions raise."""
