@@ -27,7 +27,7 @@ test: $(STAMP)
 docs: $(STAMP)
 	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
 
-# Full benchmark suite (~15 min on 2 cores): writes benchmarks/results.md and the raw JSON.
+# Full benchmark suite (~30 min on 2 cores; 29 min on 2026-11-28): writes benchmarks/results.md and the raw JSON.
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py --output benchmarks/results.md --json benchmarks/results.json
 	$(BIN)/python benchmarks/optimize.py --output benchmarks/optimize.md
