@@ -117,7 +117,7 @@ from ._solve import (  # noqa: F401  (`_scaled_field`: the benchmarks' scipy com
 from ._solver import UNTIL, Tolerances, UnrolledTsit5, _SolveConfig, _make_adjoint, make_solver
 from .contact import AbstractContactLaw
 from .errors import ParameterError, SolverError, check_positive
-from .stack import Stack, State, _is_concrete, at_impact
+from .stack import Stack, State, at_impact
 from .status import Status
 
 __all__ = [
@@ -173,7 +173,6 @@ def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, sa
     if not isinstance(state, State):
         raise ParameterError("state", type(state).__name__, "a hertz_chain.State (at_impact, dropped, resting)")
     _check_state_shape(stack, state)
-    _check_wall_beyond_the_chain(stack, state)
     if until != "t_max" and (stack.wall or (not isinstance(stack.end_force, jax.core.Tracer) and stack.held)):
         raise ParameterError("until", until, "'t_max' (with a t_max) for a chain held by an end force or a wall: "
                              "it never flies apart, so no cascade ends")
@@ -205,19 +204,6 @@ def _prepare(stack, state, ts, t_max, solver, tolerances, max_steps, adjoint, sa
             raise ParameterError("ts", f"last time {ts_np[-1]}", f"<= t_max = {t_max}")
         ts = jnp.asarray(ts_np)
     return ts, t_max, _config_for(solver, tolerances, int(max_steps), adjoint, save_steps, until)
-
-
-def _check_wall_beyond_the_chain(stack, state) -> None:
-    """A far wall lies beyond mass n-1 at the start (`Stack.wall_position` in the top mass's coordinate): the
-    stack file refuses a negative `wall.gap`, but from Python a wall placed inside the chain ran (the top
-    mass starting deep inside the wall). Concrete values only; a precompressed chain's top mass may start
-    pressed into the wall."""
-    if not stack.wall or stack.n < 2 or not _is_concrete(stack.wall_position, state.positions):
-        return
-    xw, below = np.asarray(stack.wall_position), np.asarray(state.positions)[..., -2]
-    if np.any(xw <= below):
-        raise ParameterError("wall_position", np.asarray(xw).tolist(), f"beyond mass {stack.n - 1}'s starting "
-                             f"position ({np.max(below):.6g} m): the far wall closes the chain above the top mass")
 
 
 _CONFIGS: dict = {}  # the solve configurations made, by their options (a repeated call builds none: ~0.1 ms)
@@ -606,6 +592,18 @@ def _checked(v, status, replay=False, design=None):
     whose gradients raise; otherwise a failed solve's forward derivatives raise and its reverse-mode ones
     (through a diffrax adjoint) are NaN wherever the result depends on the parameter."""
     if not isinstance(status, jax.core.Tracer):
+        # under jax.grad or jax.jacfwd without the caller's jit the status is concrete, and so are the
+        # traced design's values: its rules are checked here (a review: a Tsuji law with eta = -0.5 under
+        # plain jax.grad created energy, v_top 2.55 m/s from 1 m/s, without a word)
+        if design is not None and any(isinstance(x, jax.core.Tracer) for x in jax.tree.leaves(design)):
+            try:
+                invalid = bool(_design_invalid(*design))
+            except jax.errors.ConcretizationTypeError:  # values unknown here (checked by the guard instead)
+                invalid = False
+            if invalid:
+                raise ParameterError("design", "traced", "masses finite and > 0, gravity finite and >= 0, and "
+                                     "each law's parameters within their rules (e.g. a stiffness > 0, a damping "
+                                     ">= 0): the traced design breaks one")
         if np.asarray(status).max() > _LAST_ENDED:  # 2 us; np.any(... > Status.X) took 10 us per call
             # the cause, by the worst status (a review: the generic words suggested max_steps for a t_max)
             worst = Status(int(np.asarray(status).max()))
@@ -879,14 +877,18 @@ class _Program:
         cfg_tree = jax.tree_util.tree_structure(cfg_arrays)
         na, nc = len(self.array_at), cfg_tree.num_leaves
 
-        def run(*args):  # (launch velocities, status)
+        def design(*args):  # (stack, state) of the arrays `args[:na]`
             it = iter(args[:na])
-            full = [next(it) if a else x for x, a in zip(all_leaves, is_array)]
-            s, st = jax.tree_util.tree_unflatten(tree, full)
+            return jax.tree_util.tree_unflatten(tree, [next(it) if a else x for x, a in zip(all_leaves, is_array)])
+
+        def run(*args):  # (launch velocities, status)
+            s, st = design(*args)
             c = eqx.combine(jax.tree_util.tree_unflatten(cfg_tree, args[na : na + nc]), cfg_static)
             return _launch_impl(s, st, args[-1], c, replay)
 
-        self.nested = jax.jit(lambda *args: _checked(*run(*args), replay))
+        # under the caller's trace the design's rules are checked too (`_checked`; a review: a prepared
+        # callable under jit or vmap ran a Tsuji law with a negative eta silently, creating energy)
+        self.nested = jax.jit(lambda *args: _checked(*run(*args), replay, design=design(*args)))
         options = _config.solve_compiler_options()
         self.compiled = jax.jit(run, compiler_options=options) if options else jax.jit(run)
 

@@ -274,7 +274,7 @@ assert np.isclose(calibration.tsuji_eta(0.8) / np.sqrt(5), calibration.kelvin_vo
 # literature (Hertz, Hunt–Crossley, Tsuji, Kelvin–Voigt, viscoelastic), damping moves the peak earlier
 # (Hunt–Crossley most: at 0.39 `t_c`) and lowers it (by 8–23 %); at the same `e`, Hunt–Crossley has the
 # longest contact (0.830 ms, +3 % on Hertz), Tsuji the shortest (0.767 ms, −5 %), and the linear law the
-# lowest peak (3.52 kN against 4.55 kN for Hertz): a pulse shape is not fixed by `e` alone. The table
+# lowest peak (3.51 kN against 4.55 kN for Hertz): a pulse shape is not fixed by `e` alone. The table
 # below has the other laws too: the damped power law (`F = kδ²(1 + αδ̇)`, its `k` giving about Hertz's
 # elastic contact time) peaks 3 % above Hertz and lasts 0.843 ms, Hertz with a linear dashpot is the
 # shortest of all (0.759 ms), and the elastic–plastic laws peak *later* than Hertz (0.53–0.54 `t_c`: their

@@ -46,7 +46,7 @@ def main(argv=None) -> int:
     env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}  # the kernel's inline backend
     if args.quick:
         env["HERTZ_CHAIN_QUICK"] = "1"
-    from nbclient.exceptions import CellExecutionError
+    from nbclient.exceptions import CellExecutionError, CellTimeoutError, DeadKernelError
 
     failed = []
     for path, target in zip(paths, targets):
@@ -55,7 +55,8 @@ def main(argv=None) -> int:
         try:
             NotebookClient(nb, timeout=1800, kernel_name="python3",
                            resources={"metadata": {"path": str(HERE)}}).execute(cwd=str(HERE), env=env)
-        except CellExecutionError as exc:  # the others still run; the failed one is written up to its error
+        except (CellExecutionError, CellTimeoutError, DeadKernelError) as exc:  # the others still run; the
+            # failed one is written up to its error
             failed.append(path.name)
             last = [ln for ln in str(exc).strip().splitlines() if ln.strip()]
             print(f"  FAILED: {last[-1] if last else exc}", file=sys.stderr, flush=True)

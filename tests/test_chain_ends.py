@@ -283,15 +283,3 @@ def test_a_wall_without_the_ground_is_refused_in_one_line():
     with pytest.raises(hc.ParameterError, match=r"^wall_stiffness = .* a far wall only with the ground"):
         hc.Stack([0.01] * 3, hc.Hertz(1e9), ground=False, wall_stiffness=1e9, wall_position=0.1)
 
-
-def test_a_wall_inside_the_chain_is_refused_in_one_line():
-    """From Python a far wall placed below mass n-1 (inside the chain) ran with the top mass starting deep in
-    the wall (the stack file refuses a negative wall.gap); refused before the solve, naming the key. A wall
-    just above mass n-1 (the top mass pressed into it, as a precompressed chain starts) runs."""
-    stack = hc.Stack([0.01] * 3, hc.Hertz(1e9), gravity=0.0, wall_stiffness=1e9, wall_position=0.5e-3)
-    state = hc.State([0.0, 1e-3, 2e-3], [0.1, 0.0, 0.0])  # mass 2 at 1 mm, above the wall at 0.5 mm
-    with pytest.raises(hc.ParameterError, match=r"^wall_position = 0.0005 is invalid: beyond mass 2's starting "
-                                                 r"position \(0.001 m\)"):
-        hc.simulate(stack, state, until="t_max", t_max=1e-4)
-    ok = hc.Stack([0.01] * 3, hc.Hertz(1e9), gravity=0.0, wall_stiffness=1e9, wall_position=1.9e-3)
-    assert hc.simulate(ok, state, until="t_max", t_max=1e-5, throw=False).t_final == 1e-5  # it runs

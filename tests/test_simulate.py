@@ -425,6 +425,10 @@ def test_a_traced_design_that_breaks_a_rule_raises_under_jit():
     assert np.isfinite(float(grad(1e9)))
     with pytest.raises(Exception, match="the traced design breaks a rule"):
         float(grad(0.0))
+    # without the caller's jit the values are known after the solve: ParameterError at once (a second review:
+    # plain jax.grad of a Tsuji law with a negative eta created energy silently)
+    with pytest.raises(hc.ParameterError, match="the traced design breaks one"):
+        jax.grad(top)(0.0)
 
 
 def test_parameters_past_the_checks_fail_instead_of_returning_nan():
