@@ -432,14 +432,16 @@ def prepare_record(measured: MeasuredPulse, cfc: int | None = None) -> tuple[np.
     # a constant offset of the channel (a review: +5 g, 0.4 % of the peak, moved a fitted e by 2.4 standard
     # errors without a word): its mean before the pulse, beyond 4 standard errors of that mean and 0.1 % of the
     # peak
-    mean, std, count = quiet_start(t, m_u)
+    quiet = _quiet_samples(t, m_u)
     peak = float(np.max(m_u))
-    if count and np.isfinite(mean) and abs(mean) > 1e-3 * peak:
-        if abs(mean) > 4 * std / np.sqrt(_independent_samples(_quiet_samples(t, m_u))):
+    if quiet.size >= QUIET_MIN_SAMPLES:
+        mean, std = float(quiet.mean()), float(quiet.std(ddof=1))
+        if abs(mean) > 1e-3 * peak and abs(mean) > 4 * std / np.sqrt(_independent_samples(quiet)):
             own = -mean if flipped else mean  # in the file's own sign (a review: the flipped one misled)
-            notes.append(f"the record's quiet start ({count} samples before the pulse) averages {own / G0:.4g} g "
-                         f"in the file ({100 * own / peak:+.2f} % of the peak), not 0: an offset of the channel "
-                         "shifts the velocity change and biases a fit; subtract it (the pre-trigger mean) first")
+            notes.append(f"the record's quiet start ({quiet.size} samples before the pulse) averages "
+                         f"{own / G0:.4g} g in the file ({100 * own / peak:+.2f} % of the peak), not 0: an offset "
+                         "of the channel shifts the velocity change and biases a fit; subtract it (the "
+                         "pre-trigger mean) first")
     return t, m_u, notes
 
 
