@@ -574,7 +574,7 @@ def _launch_impl(stack, state, t_max, cfg, replay):
 
 _NOT_ENDED = ("hertz_chain.launch_velocity: the cascade did not end (t_max or max_steps reached, no contact, "
               "or a non-finite state), or the traced design breaks a rule (masses finite and > 0, gravity >= 0, "
-              "each law's parameters, e.g. a stiffness > 0: traced, they are checked only here, after the "
+              "gaps and drop speed finite and >= 0, each law's parameters, e.g. a stiffness > 0: traced, they are checked only here, after the "
               "solve); raise t_max or max_steps, or check the design")
 
 

@@ -64,6 +64,20 @@ def _is_concrete(*xs) -> bool:
     return not any(isinstance(x, jax.core.Tracer) for x in jax.tree.leaves(xs))
 
 
+def _traced_rule(a: Array, ok: Array, name: str, allowed: str) -> Array:
+    """`a` with its rule (`ok`) checked where it is traced, as a concrete value is checked at once:
+    `ParameterError` where the value is known (plain `jax.grad`/`jax.jacfwd`); under the caller's
+    `jit`/`vmap`, `a` made NaN where it breaks the rule, so that the state is not finite and
+    `launch_velocity`'s guard after the solve raises (no host callback in the compiled solve)."""
+    try:
+        known_bad = not bool(jnp.all(ok))
+    except jax.errors.ConcretizationTypeError:  # under jit or vmap: checked when it runs
+        return jnp.where(ok, a, jnp.nan)
+    if known_bad:
+        raise ParameterError(name, "traced", f"{allowed}: the traced value breaks the rule")
+    return a
+
+
 def _real_array(value: ArrayLike, name: str, shape: tuple | None = None) -> Array:
     """`value` as a float array, or `ParameterError` naming `name` for what is not numbers (a string, a
     complex number; `shape`: the one shape allowed)."""
@@ -527,7 +541,9 @@ def _gaps(stack: Stack, gaps) -> Array:
     if g.shape != (n - 1,):
         raise ParameterError("gaps", tuple(g.shape), f"a scalar or shape ({n - 1},): the gap between "
                              "mass j and j+1 (m)")
-    if _is_concrete(g) and not np.all((np.asarray(g) >= 0) & np.isfinite(np.asarray(g))):
+    if not _is_concrete(g):
+        return _traced_rule(g, jnp.isfinite(g) & (g >= 0), "gaps", "finite and >= 0 (m)")
+    if not np.all((np.asarray(g) >= 0) & np.isfinite(np.asarray(g))):
         raise ParameterError("gaps", np.asarray(g).tolist(), "finite and >= 0 (m)")
     return g
 
@@ -543,7 +559,9 @@ def at_impact(stack: Stack, velocity: ArrayLike, gaps: ArrayLike | None = None) 
     velocity `v_ff`".
     """
     v = _real_array(velocity, "velocity", shape=())
-    if _is_concrete(v) and not (np.isfinite(float(v)) and float(v) >= 0):
+    if not _is_concrete(v):
+        v = _traced_rule(v, jnp.isfinite(v) & (v >= 0), "velocity", "a finite drop speed >= 0 (m/s, downward)")
+    elif not (np.isfinite(float(v)) and float(v) >= 0):
         raise ParameterError("velocity", float(v), "a finite drop speed >= 0 (m/s, downward)")
     g = _gaps(stack, gaps)
     x = jnp.concatenate([jnp.zeros(1), jnp.cumsum(g)])
@@ -554,6 +572,8 @@ def dropped(stack: Stack, height: ArrayLike, gaps: ArrayLike | None = None) -> S
     """Initial state (b): dropped from rest at `height` (m) with rigid gaps: `at_impact` with
     `v_ff = sqrt(2 g h)` (free fall, the gaps unchanged since every mass falls alike)."""
     h = jnp.asarray(height, dtype=float)
+    if not _is_concrete(h):
+        h = _traced_rule(h, jnp.isfinite(h) & (h >= 0), "height", "finite and >= 0 (m)")
     if _is_concrete(h, stack.gravity):
         if not (np.isfinite(float(h)) and float(h) >= 0):
             raise ParameterError("height", float(h), "finite and >= 0 (m)")
@@ -602,7 +622,9 @@ def resting(stack: Stack, height: ArrayLike = 0.0) -> State:
     Without the ground only `height = 0` makes sense and interface 0 carries nothing.
     """
     h = jnp.asarray(height, dtype=float)
-    if _is_concrete(h) and not (np.isfinite(float(h)) and float(h) >= 0):
+    if not _is_concrete(h):
+        h = _traced_rule(h, jnp.isfinite(h) & (h >= 0), "height", "finite and >= 0 (m)")
+    elif not (np.isfinite(float(h)) and float(h) >= 0):
         raise ParameterError("height", float(h), "finite and >= 0 (m)")
     m, g = stack.masses, stack.gravity
     above = jnp.cumsum(m[::-1])[::-1]  # above[i] = sum_{k >= i} m_k

@@ -431,6 +431,27 @@ def test_a_traced_design_that_breaks_a_rule_raises_under_jit():
         jax.grad(top)(0.0)
 
 
+def test_a_traced_negative_gap_or_drop_speed_raises():
+    """Noticed in a review: a negative gap traced through `at_impact` (the concrete check cannot read it)
+    started the stack overlapped and ran silently. Now the traced gap and drop speed carry their rule: a
+    run-time error of the compiled function under jit (the state made non-finite, caught by the guard after
+    the solve), `ParameterError` at once under plain `jax.grad`."""
+    tol = Tolerances(rtol=1e-8, atol=1e-8)
+    stack = Stack(jnp.asarray([1.0, 0.3]), Hertz(1e9))
+
+    def top(gap, v=1.0):
+        return hc.launch_velocity(stack, at_impact(stack, v, gap), tolerances=tol)[-1]
+
+    grad = jax.jit(jax.grad(top))
+    assert np.isfinite(float(grad(1e-3)))
+    with pytest.raises(Exception, match="gaps and drop speed finite and >= 0"):
+        float(grad(-1e-3))
+    with pytest.raises(hc.ParameterError, match=r"gaps = 'traced' is invalid: finite and >= 0"):
+        jax.grad(top)(-1e-3)
+    with pytest.raises(Exception, match="gaps and drop speed finite and >= 0"):
+        float(jax.jit(lambda v: top(1e-3, v))(-1.0))
+
+
 def test_parameters_past_the_checks_fail_instead_of_returning_nan():
     """A negative mass set past `Stack`'s checks (`eqx.tree_at`, or a traced value) gives a non-finite
     launch velocity: the run is `failed` (not `complete` with NaN), and the launch functions raise."""
