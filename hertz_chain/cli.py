@@ -7,7 +7,7 @@ Commands:
   — simulate a stack file and compare with the rigid model; `--set` overrides a key of the file
   (`--set drop.height="30 cm"`; also for `check` and `compare`).
 - `hertz-chain optimize STACK.toml [--json] [--write OUT.toml] [--plot F.png]` — the best stack under
-  compliant contacts (`hertz_chain.optimization`; exit 0 converged, 3 not converged, 5 failed).
+  compliant contacts (`hertz_chain.optimization`; exit 0 converged, 1 pulse target not met, 3 not converged, 5 failed).
 - `hertz-chain sweep STACK.toml --output OUT.zarr [--workers N | --scheduler ADDR] [--resume] [--json]` —
   a design space into a Zarr store that survives a kill (`hertz_chain.sweeps`).
 - `hertz-chain plot OUT.zarr --x KEY [--y KEY] [--var NAME] --output F.png` — a line or a map from a sweep.
@@ -381,6 +381,12 @@ def optimize(
         typer.echo(f"hertz-chain: optimize {result.status.text}: {_one_line(result.convergence['why'])}; the "
                    "best point found is reported", err=True)
         raise typer.Exit(code=result.status.exit_code)
+    if result.convergence.get("pulse_target_met") is False:  # converged on the closest pulse within reach
+        miss = result.convergence["pulse_misses"]
+        typer.echo(f"hertz-chain: optimize: pulse target NOT MET (peak g {100 * miss['peak_g']:+.3g} %, duration "
+                   f"{100 * miss['duration']:+.3g} %): the bounds or limits keep it out of reach; the closest pulse "
+                   "within them is reported", err=True)
+        raise typer.Exit(code=EXIT_CHECK_FAILED)
 
 
 @app.command()

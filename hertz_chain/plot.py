@@ -262,10 +262,13 @@ def plot_check(result, path: str | Path) -> None:
     a_g = result.a / G0
     if a_g[np.argmax(np.abs(a_g))] < 0:
         a_g = -a_g
-    # the nominal pulse and its band over their whole support, also where the record does not reach
-    # (the pulse reads zero outside the record: free flight)
+    # the nominal pulse and its band over the window where the band is judged, also where the record does
+    # not reach (the pulse reads zero outside the record: free flight)
+    w0, w1 = ((w - result.nominal_start for w in result.band_window) if result.band_window is not None
+              else (0.0, 0.0))
     span = spec.duration + (spec.fall_time or 0.0)
-    rel = np.union1d(result.t - result.nominal_start, np.linspace(-0.05 * span, 1.05 * span, 801))
+    rel = np.union1d(result.t - result.nominal_start,
+                     np.linspace(min(-0.05 * span, w0), max(1.05 * span, w1), 801))
     a_g = np.interp(rel, result.t - result.nominal_start, a_g, left=0.0, right=0.0)
     t = rel * 1e3
     nom = nominal_pulse(spec.shape, spec.peak_g, spec.duration, rel)
@@ -276,7 +279,8 @@ def plot_check(result, path: str | Path) -> None:
         fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
     if spec.band is not None:
         lo, hi = band_limits(spec, rel)
-        ax.fill_between(t, lo, hi, color="0.85", label=f"band ±{spec.band:g} A")
+        judged = (rel >= w0) & (rel <= w1)
+        ax.fill_between(t, lo, hi, where=judged, color="0.85", label=f"band ±{spec.band:g} A (where judged)")
     ax.plot(t, nom, "k--", lw=1, label=f"nominal {spec.shape}, {spec.peak_g:g} g, {spec.duration * 1e3:g} ms")
     ax.plot(t, a_g, color="C3", lw=1.6, label="top pulse (model)")
     for c in result.criteria:

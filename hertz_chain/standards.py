@@ -73,6 +73,12 @@ STANDARDS_CSV = Path(__file__).resolve().parent / "data" / "shock_standards.csv"
 #: zero over `fall_time` (hertz_chain's choice, stated in every check that uses it; `test.fall_time`).
 DEFAULT_FALL = 0.1
 
+#: The band is judged from `before · D` ahead of the nominal pulse to `after · D` past its end (and over
+#: the pulse's own 10 % span): the standards' tolerance figures monitor the pulse some time before and
+#: after it, so that ringing, an undershoot or a second hit there fails. hertz_chain's default, not a
+#: number read in a standard (`test.band_window`, in multiples of D; set it from your standard's figure).
+DEFAULT_BAND_WINDOW = (0.4, 0.4)
+
 SHAPES = {
     "half-sine": (2.0 / math.pi, 1.0 - 2.0 * math.asin(0.1) / math.pi),
     "sawtooth": (0.5, 0.9),
@@ -241,6 +247,7 @@ class TestSpec:
     srs: tuple[tuple[float, float], ...] | None = None  # required SRS: rows (Hz, g)
     srs_tolerance_db: tuple[float, float] | None = None  # (below, above) in dB
     srs_q: float = 10.0
+    band_window: tuple[float, float] = DEFAULT_BAND_WINDOW  # judged before / after the nominal pulse, in D
 
     def __post_init__(self):
         if self.fall_time is None and self.shape == "sawtooth":
@@ -294,6 +301,7 @@ class CheckResult:
     notes: tuple[str, ...] = ()
     t: np.ndarray | None = dataclasses.field(default=None, repr=False)  # the checked record (s)
     a: np.ndarray | None = dataclasses.field(default=None, repr=False)  # and its samples (m/s²)
+    band_window: tuple[float, float] | None = None  # where the band was judged (s, the record's times)
 
     @property
     def passed(self) -> bool | None:
@@ -311,6 +319,7 @@ class CheckResult:
         return {"condition": self.spec.name, "shape": self.spec.shape, "nominal_peak_g": self.spec.peak_g,
                 "nominal_duration_ms": self.spec.duration * 1e3, "source": self.spec.source,
                 "passed": self.passed, "verdict": self.verdict.lower(), "nominal_start_s": self.nominal_start,
+                "band_window_s": None if self.band_window is None else list(self.band_window),
                 "criteria": [c.to_dict() for c in self.criteria], "notes": list(self.notes)}
 
     def table(self) -> str:
@@ -344,14 +353,25 @@ def _judge(name, unit, value, nominal, tol) -> Criterion:
 BAND_POINTS = 401
 
 
-def band_margin(t, a_g, spec: TestSpec, start: float, lobe: tuple[float, float]) -> float:
+def band_window(spec: TestSpec, centre_start: float, lobe: tuple[float, float]) -> tuple[float, float]:
+    """The times (s) over which the band is judged: from `band_window[0] · D` before the nominal pulse
+    to `band_window[1] · D` after its end (`D`, plus a sawtooth's `fall_time`), the nominal pulse placed
+    with its 10 % points centred on the pulse's (`centre_start`, before the band's own placement, so that
+    the window is the record's, not moved by the placement), joined with the pulse's main lobe `lobe`."""
+    before, after = spec.band_window
+    end = centre_start + spec.duration + (spec.fall_time or 0.0)
+    return min(centre_start - before * spec.duration, lobe[0]), max(end + after * spec.duration, lobe[1])
+
+
+def band_margin(t, a_g, spec: TestSpec, start: float, window: tuple[float, float]) -> float:
     """Smallest distance (g) of the pulse inside its band (:func:`band_limits`), negative where it leaves
-    it, over the nominal pulse's support `[start, start + D (+ fall_time)]` joined with the pulse's main
-    lobe `lobe`, for the nominal pulse starting at `start` (the pulse `a_g` in g, linear between
+    it, over `window` (:func:`band_window`) joined with the nominal pulse's support `[start, start + D
+    (+ fall_time)]`, for the nominal pulse starting at `start` (the pulse `a_g` in g, linear between
     samples, sampled at `t`, its first and last values held outside them). Evaluated at the pulse's samples
-    and at `BAND_POINTS` even points over that support: the band's own shape counts between samples, and
+    and at `BAND_POINTS` even points over that span: the band's own shape counts between samples, and
     where the nominal pulse reaches past the record (the record stops at the cascade's end)."""
-    t0, t1 = min(start, lobe[0]), max(start + spec.duration + (spec.fall_time or 0.0), lobe[1])
+    t0 = min(window[0], start)
+    t1 = max(window[1], start + spec.duration + (spec.fall_time or 0.0))
     inside = (t >= t0) & (t <= t1)
     tt = np.union1d(t[inside], np.linspace(t0, t1, BAND_POINTS))
     aa = np.interp(tt, t, a_g)
@@ -386,18 +406,28 @@ def check_pulse(t, a, spec: TestSpec) -> CheckResult:
     lead = {"half-sine": math.asin(0.1) / math.pi, "sawtooth": 0.1, "trapezoid": 0.01}[spec.shape] * spec.duration
     start = 0.5 * (pm.t_start_10 + pm.t_end_10) - (lead + 0.5 * w)
     if spec.band is not None:
-        lobe = (pm.t_start_10, pm.t_end_10)
+        window = band_window(spec, start, (pm.t_start_10, pm.t_end_10))
         span = 0.5 * spec.duration
         grid = start + np.linspace(-span, span, 201)
-        vals = [band_margin(t, a_g, spec, s, lobe) for s in grid]
+        vals = [band_margin(t, a_g, spec, s, window) for s in grid]
         k = int(np.argmax(vals))
         lo_s, hi_s = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
-        res = minimize_scalar(lambda s: -band_margin(t, a_g, spec, s, lobe), bounds=(lo_s, hi_s), method="bounded",
+        res = minimize_scalar(lambda s: -band_margin(t, a_g, spec, s, window), bounds=(lo_s, hi_s), method="bounded",
                               options={"xatol": 1e-6 * spec.duration})
         start = float(res.x) if -res.fun >= vals[k] else float(grid[k])
-        m = band_margin(t, a_g, spec, start, lobe)
+        m = band_margin(t, a_g, spec, start, window)
         crit.append(Criterion("band", "g", float(spec.band * spec.peak_g - m), 0.0, 0.0,
                               float(spec.band * spec.peak_g), float(m), bool(m >= 0)))
+        w0 = min(window[0], start)
+        w1 = max(window[1], start + spec.duration + (spec.fall_time or 0.0))
+        window = (w0, w1)
+        outside = (t < w0) | (t > w1)
+        if np.any(outside) and np.max(np.abs(a_g[outside])) > spec.band * spec.peak_g:
+            k = int(np.flatnonzero(outside)[np.argmax(np.abs(a_g[outside]))])
+            notes.append(f"the record leaves the band outside the judged window: {a_g[k]:+.4g} g at "
+                         f"{(t[k] - start) * 1e3:+.4g} ms from the nominal pulse's start, not judged (the band "
+                         f"is judged from {spec.band_window[0]:g} D before the nominal pulse to "
+                         f"{spec.band_window[1]:g} D after it: test.band_window)")
         if spec.shape == "sawtooth" and spec.fall_time:
             notes.append(f"the band lets the sawtooth fall from its peak to zero within {spec.fall_time * 1e3:.4g} ms "
                          f"after D (test.fall_time; default {DEFAULT_FALL:g} D, hertz_chain's allowance, not a "
@@ -408,13 +438,14 @@ def check_pulse(t, a, spec: TestSpec) -> CheckResult:
         notes.append(note)
     if pm.truncated:
         notes.append("the record cuts the pulse: its duration and velocity change are measured to the record's end")
-    return CheckResult(spec, tuple(crit), float(start), tuple(notes), t, a)
+    return CheckResult(spec, tuple(crit), float(start), tuple(notes), t, a,
+                       None if spec.band is None else (float(window[0]), float(window[1])))
 
 
 # ------------------------------------------------------------------------------------------ files
 #: Keys of a stack file's `[test]` section.
 TEST_KEYS = ("standard", "shape", "peak_g", "duration", "peak_tolerance", "duration_tolerance",
-             "velocity_tolerance", "band", "fall_time", "srs", "srs_tolerance_db", "srs_q")
+             "velocity_tolerance", "band", "band_window", "fall_time", "srs", "srs_tolerance_db", "srs_q")
 
 
 def _tolerance(raw, key: str) -> tuple[float, float]:
@@ -525,6 +556,14 @@ def parse_test(raw, standard: str | None = None) -> TestSpec:
             raise StackFileError(f"test.band: {b!r} is invalid: the band's half-width as a fraction of the peak, "
                                  "in (0, 1), e.g. 0.2")
         over["band"] = float(b)
+    if "band_window" in raw:
+        w = raw["band_window"]
+        if (not isinstance(w, list) or len(w) != 2 or any(isinstance(v, bool) or not isinstance(v, (int, float))
+                                                            or not (math.isfinite(v) and 0 <= v <= 100) for v in w)):
+            raise StackFileError(f"test.band_window: {w!r} is invalid: [before, after], how long the band is judged "
+                                 "before and after the nominal pulse in multiples of its duration D, each in "
+                                 "[0, 100], e.g. [0.4, 0.4]")
+        over["band_window"] = (float(w[0]), float(w[1]))
     if "fall_time" in raw:
         f = parse_quantity(raw["fall_time"], "time", "test.fall_time")
         if not f > 0:
@@ -593,7 +632,8 @@ duration is sampled more coarsely than 400 per its own duration)."""
 
 def pulse_record(report, spec: TestSpec, samples_per_duration: int = 400):
     """The top mass's accelerometer around its main pulse, uniformly sampled on the dense solution:
-    `(t, a)` over the pulse's 10 % points widened by one nominal duration each side (inside the run),
+    `(t, a)` over the pulse's 10 % points widened by one nominal duration each side, or by the band's
+    judged window (`band_window`, plus half a duration) where that is longer (inside the run),
     `samples_per_duration` samples per the shorter of the nominal duration and the pulse's own 10 %
     duration (a review: sampled by an 11 ms nominal alone, a 0.065 ms pulse's peak read 1.3 % low), at
     most `MAX_RECORD` samples."""
@@ -603,8 +643,9 @@ def pulse_record(report, spec: TestSpec, samples_per_duration: int = 400):
     if top is None:
         raise ParameterError("report", "no top pulse", "a run in which the top mass was struck")
     st = report.solution.steps.t
-    t0 = max(float(st[0]), top.t_start_10 - spec.duration)
-    t1 = min(float(st[-1]), top.t_end_10 + spec.duration)
+    before, after = (max(1.0, w + 0.5) for w in spec.band_window)  # (+ 0.5 D: the nominal pulse's shift)
+    t0 = max(float(st[0]), top.t_start_10 - before * spec.duration)
+    t1 = min(float(st[-1]), top.t_end_10 + (after + (spec.fall_time or 0.0) / spec.duration) * spec.duration)
     width = spec.duration
     if np.isfinite(top.duration_10) and top.duration_10 > 0:
         width = min(width, top.duration_10)

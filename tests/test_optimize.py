@@ -556,7 +556,7 @@ def test_pulse_peak_and_duration_derivatives_match_johnsons_closed_form(tmp_path
         assert jac[0, 0] == pytest.approx((objective(u + h) - objective(u - h)) / (2 * h), rel=1e-5)
 
 
-def test_a_peak_force_limit_stops_the_drop_speed_where_johnson_says(tmp_path):
+def test_a_peak_force_limit_stops_the_drop_speed_where_johnson_says(tmp_path, capsys):
     """One 0.1 kg mass on an elastic Hertz ground (k = 1e9 N/m^1.5, g = 0), the drop speed varied in
     [0.5, 3] m/s for a pulse whose peak target (10,000 g) cannot be met under max_peak_force = 3 kN and
     whose duration target is the equivalent half-sine at the force limit: the optimum is the speed at
@@ -586,6 +586,11 @@ def test_a_peak_force_limit_stops_the_drop_speed_where_johnson_says(tmp_path):
     assert limit["state"] == "active" and limit["value"] == pytest.approx(F, rel=1e-3)
     assert "max_peak_force 3000 N: " in optimize_table(result)
     assert "pulse target NOT MET (peak g -69.4 %" in result.document().splitlines()[0]
+    # the command line exits 1, as `check` does for a failed criterion (it exited 0: a script took the miss
+    # for a met target)
+    code, text, err = _cli(["optimize", str(tmp_path / "stack.toml"), "--json"], capsys)
+    assert code == 1 and json.loads(text)["convergence"]["pulse_target_met"] is False
+    assert err.startswith("hertz-chain: optimize: pulse target NOT MET (peak g -69.4 %")
 
 
 def test_optimize_refuses_a_plastic_law_and_names_sweep_and_fit(tmp_path):

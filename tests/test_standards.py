@@ -178,6 +178,9 @@ def test_test_section_overrides_the_row():
     ({"standard": "JESD22-B110 B", "peak_tolerance": 200}, "test.peak_tolerance: 200 is invalid: a percentage below 100"),
     ({"standard": "JESD22-B110 B", "duration_tolerance": -30}, "test.duration_tolerance: -30 is invalid"),
     ({"standard": "JESD22-B110 B", "band": 1.5}, "test.band"),
+    ({"standard": "JESD22-B110 B", "band_window": 0.4}, "test.band_window: 0.4 is invalid: [before, after]"),
+    ({"standard": "JESD22-B110 B", "band_window": [-1, 0.4]}, "test.band_window: [-1, 0.4] is invalid"),
+    ({"standard": "JESD22-B110 B", "band_window": [True, 1]}, "test.band_window: [True, 1] is invalid"),
     ({"standard": "JESD22-B110 B", "duration": "1 kg"}, "test.duration"),
     # an unknown condition names its key (it read "standard = ... is invalid", without the file's key)
     ({"standard": "MIL-STD-883 2002 Z"}, "test.standard: 'MIL-STD-883 2002 Z' is invalid: did you mean"),
@@ -312,3 +315,31 @@ def test_the_band_counts_where_the_nominal_pulse_reaches_past_the_samples():
     for tt, aa in ((t, a), (dense, np.interp(dense, t, a))):
         (band,) = [c for c in check_pulse(tt, aa, spec).criteria if c.name == "band"]
         assert band.value == pytest.approx(1000 * math.cos(math.pi * 0.5 / 5), rel=1e-8) and not band.passed
+
+
+def test_the_band_is_judged_before_and_after_the_pulse_over_its_window():
+    """A review: the band was judged only over the nominal pulse and the pulse's own 10 % span, so ringing,
+    an undershoot or a spike just before or after the pulse passed. An exact 1500 g, 0.5 ms half-sine
+    (condition B, band 0.2 A = 300 g) with a 400 g spike 0.15 ms before it: inside the default window
+    (0.4 D = 0.2 ms before), the band fails by 400 - 300 = 100 g (closed form). A 750 g second half-sine
+    1 ms after the pulse lies outside the default window: not judged, and a note says where the record
+    leaves the band; with `band_window = [0.4, 3]` it is judged and fails by 750 - 300 = 450 g."""
+    t = np.arange(-1e-3, 3.5e-3, 5e-7)
+    a = np.where((t >= 0) & (t <= 5e-4), 1500 * np.sin(np.pi * t / 5e-4), 0.0)
+    second = np.where((t >= 1.5e-3) & (t <= 2e-3), 750 * np.sin(np.pi * (t - 1.5e-3) / 5e-4), 0.0)
+    spike = np.where(np.abs(t + 1.5e-4) < 5e-6, 400.0, 0.0)
+
+    def band(record, **over):
+        r = check_pulse(t, record * G0, parse_test({"standard": "MIL-STD-883 2002 B", "band": 0.2} | over))
+        (c,) = [c for c in r.criteria if c.name == "band"]
+        return c, r.notes
+
+    c, notes = band(a)  # up to the linear interpolation's error between samples, dt^2/8 A (pi/D)^2 = 1.85e-3 g
+    assert c.passed and c.margin == pytest.approx(300.0, abs=2e-3) and notes == ()
+    c, _ = band(a + spike)
+    assert not c.passed and c.margin == pytest.approx(-100.0, abs=1e-3)
+    c, notes = band(a + second)
+    assert c.passed and len(notes) == 1
+    assert notes[0].startswith("the record leaves the band outside the judged window: +750 g at +1.75 ms")
+    c, notes = band(a + second, band_window=[0.4, 3])
+    assert not c.passed and c.margin == pytest.approx(-450.0, abs=1e-3) and notes == ()
