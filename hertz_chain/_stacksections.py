@@ -346,11 +346,13 @@ def _parse_design(raw: Any, default_restitution: float | None) -> DesignSpec:
         raise _error("stack.design.n", f"{n_raw!r} is invalid: an integer >= 2 or 'optimal'")
     else:
         n = _int(n_raw, "stack.design.n", 2, MAX_MASSES, " (the most masses a stack may have)")
+    given_e = True
     if "restitution" in t:
         e = parse_quantity(t["restitution"], "dimensionless", "stack.design.restitution")
         _check(0 < e <= 1, "stack.design.restitution", t["restitution"], "must be in (0, 1]")
     elif default_restitution is not None and 0 < default_restitution <= 1:
         e = default_restitution
+        given_e = False
     else:
         raise _error(
             "stack.design.restitution",
@@ -370,7 +372,7 @@ def _parse_design(raw: Any, default_restitution: float | None) -> DesignSpec:
                 f"an MET design with n = {n} needs exactly one of bottom_mass, top_mass (got "
                 f"{', '.join(given) or 'none'}); its mass ratios follow from e (Eq 25)",
             )
-        return _check_design(DesignSpec(kind, n, e, m1, mn, None))
+        return _check_design(DesignSpec(kind, n, e, m1, mn, None, given_e))
     if len(given) != 2:
         raise _error(
             "stack.design",
@@ -383,7 +385,7 @@ def _parse_design(raw: Any, default_restitution: float | None) -> DesignSpec:
         m1 = mn / R
     else:
         mn = m1 * R
-    return _check_design(DesignSpec(kind, n, e, m1, mn, R))
+    return _check_design(DesignSpec(kind, n, e, m1, mn, R, given_e))
 
 
 

@@ -128,6 +128,8 @@ class DesignSpec:
     bottom_mass: float | None = None
     top_mass: float | None = None
     mass_ratio: float | None = None
+    #: False where `restitution` was not given and is `contact.restitution`'s (the design follows it)
+    restitution_given: bool = True
 
 
 @dataclass(frozen=True)

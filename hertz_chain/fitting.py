@@ -45,7 +45,7 @@ import numpy as np
 
 from .constants import G0
 from .errors import ParameterError, SolverError, StackFileError
-from .keys import KEYS, Slot, check_values, quantity_of, read_bounds, read_entry, resolve
+from .keys import KEYS, Slot, check_design_follows, check_values, quantity_of, read_bounds, read_entry, resolve
 from .status import Status
 
 __all__ = ["FIT_KEYS", "FitParameter", "FitResult", "parse_vary_option", "read_fit_file", "fit"]
@@ -204,11 +204,12 @@ def _parse_fit(raw: Any, spec) -> tuple[list[_Vary], int]:
         read_entry(item, where, _VARY_KEYS, "contact.stiffness")
         key = item["key"]
         resolve(key, None, n=3, ground=True, where=f"{where}.key")
+        check_design_follows(spec, key, f"{where}.key")
         bounds = None
         if "bounds" in item:
             dim, p = quantity_of(spec, key, item.get("index"), where)
             bounds = read_bounds(item["bounds"], dim, f"{where}.bounds", p)
-            check_values(key, list(bounds), f"{where}.bounds", shown=repr(item["bounds"]))
+            check_values(key, list(bounds), f"{where}.bounds", shown=repr(item["bounds"]), gravity=spec.drop.gravity)
         elif key not in DEFAULT_BOUNDS:
             raise StackFileError(f"{where}.bounds: missing; {key} has no default bounds (give [lower, upper] "
                                  "with units)")

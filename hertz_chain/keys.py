@@ -21,10 +21,12 @@ import difflib
 import math
 from dataclasses import dataclass
 
+from ._stackspec import MIN_RESTITUTION
 from .errors import StackFileError
+from .units import LIMITS
 
 __all__ = ["KeyRow", "KEYS", "Slot", "resolve", "read_entry", "read_bounds", "dimension", "allowed_values",
-           "valid_values", "check_values"]
+           "valid_values", "check_values", "check_design_follows"]
 
 
 @dataclass(frozen=True)
@@ -33,8 +35,8 @@ class KeyRow:
 
     `dimension`: a `stackfile` dimension name (`"stiffness"`: the interface's law decides, N/m^1.5 or
     N/m); `over`: what its index counts (`"mass"`, `"gap"`, `"interface"`, or `None` for a scalar);
-    `log`: searched in log space (a positive scale quantity spanning decades); `lower`: the smallest
-    value allowed (exclusive when `positive`)."""
+    `log`: searched in log space (a positive scale quantity spanning decades); `positive`: > 0 (else
+    >= 0); `lower`, `upper`: the smallest and largest values allowed (inclusive)."""
 
     key: str
     dimension: str
@@ -42,13 +44,14 @@ class KeyRow:
     log: bool = False
     positive: bool = True
     upper: float | None = None
+    lower: float | None = None
 
 
 KEYS: dict[str, KeyRow] = {row.key: row for row in (
     KeyRow("stack.masses", "mass", "mass", log=True),
     KeyRow("stack.gaps", "length", "gap", positive=False),
     KeyRow("contact.stiffness", "stiffness", "interface", log=True),
-    KeyRow("contact.restitution", "dimensionless", "interface", upper=1.0),
+    KeyRow("contact.restitution", "dimensionless", "interface", upper=1.0, lower=MIN_RESTITUTION),
     KeyRow("drop.impact_velocity", "velocity", None),
     KeyRow("drop.height", "length", None),
 )}
@@ -142,6 +145,22 @@ def dimension(spec, key: str, index: object, where: str = "key") -> str:
     return quantity_of(spec, key, index, where)[0]
 
 
+def check_design_follows(spec, key: str, where: str) -> None:
+    """Refuse to vary `contact.restitution` where the file's `[stack.design]` takes its restitution from
+    it and its masses depend on it (an MET design, Eq 25; an optimal n, Eqs 22-24): `simulate --set`
+    redesigns the masses for each e, a vectorised design cannot, and would keep those of the file's e.
+    **Raises** `StackFileError` (one line, at `where`)."""
+    d = getattr(spec.stack, "design", None)
+    if key != "contact.restitution" or d is None or d.restitution_given or (d.kind != "met" and d.n is not None):
+        return
+    how = "an MET design's masses follow from e (Eq 25)" if d.kind == "met" else \
+        "the optimal number of masses follows from e (Eqs 22-24)"
+    raise StackFileError(f"{where}: contact.restitution cannot vary here: [stack.design] takes its restitution "
+                         f"from it, and {how}; the masses would stay those of e = {d.restitution:g} while "
+                         "simulate --set redesigns them. Give stack.design.restitution (the masses then stay "
+                         "fixed while the contacts' e varies), or vary the design's files one by one")
+
+
 def quantity_of(spec, key: str, index: object, where: str = "key") -> tuple[str, float | None]:
     """The `stackfile` dimension of `key` in the file `spec` and, for a power law's stiffness (N/m^p), its
     exponent p (else None). A stiffness is N/m^1.5, N/m or N/m^p by the law of the interfaces named,
@@ -190,16 +209,22 @@ def read_bounds(raw: object, dim: str, where: str, exponent: float | None = None
     return lo, hi
 
 
-def allowed_values(key: str) -> str:
-    """What `key` may be, for messages: `> 0`, `>= 0`, or `> 0 and <= 1`."""
+def allowed_values(key: str, gravity: float | None = None) -> str:
+    """What `key` may be, for messages: `> 0`, `>= 0`, `>= 0.001 and <= 1`; a drop height's limit
+    with `gravity` (m/s²)."""
     row = KEYS[key]
-    base = "> 0" if row.positive else ">= 0"
+    base = f">= {row.lower:g}" if row.lower is not None else "> 0" if row.positive else ">= 0"
+    if key == "drop.height" and gravity:
+        v_max = LIMITS["velocity"][1]
+        return (f"{base} and at most {v_max ** 2 / (2 * gravity):.6g} m (a fall from it reaches at most {v_max:g} "
+                f"m/s, sqrt(2 g h))")
     return base + (f" and <= {row.upper:g}" if row.upper is not None else "")
 
 
-def valid_values(key: str, values):
+def valid_values(key: str, values, gravity: float | None = None):
     """Elementwise: whether `values` (SI, a number or a numpy array) are allowed for `key` (`KeyRow`:
-    finite, > 0 or >= 0, at most `upper`)."""
+    finite, > 0 or >= 0, within `lower` and `upper`; a drop height, with `gravity` (m/s²), no higher
+    than a fall reaching the largest speed a stack file takes, as `drop.height` itself)."""
     import numpy as np
 
     row = KEYS[key]
@@ -207,15 +232,19 @@ def valid_values(key: str, values):
     ok = np.isfinite(v) & ((v > 0) if row.positive else (v >= 0))
     if row.upper is not None:
         ok &= v <= row.upper
+    if row.lower is not None:
+        ok &= v >= row.lower
+    if key == "drop.height" and gravity:
+        ok &= np.sqrt(2.0 * gravity * np.where(ok, v, 0.0)) <= LIMITS["velocity"][1]
     return ok
 
 
-def check_values(key: str, values, where: str, shown=None) -> None:
-    """Raise `StackFileError` (one line) unless every value is allowed for `key`."""
+def check_values(key: str, values, where: str, shown=None, gravity: float | None = None) -> None:
+    """Raise `StackFileError` (one line) unless every value is allowed for `key` (`valid_values`)."""
     import numpy as np
 
-    ok = valid_values(key, values)
+    ok = valid_values(key, values, gravity)
     if not np.all(ok):
         bad = np.asarray(values, dtype=float).reshape(-1)[~ok.reshape(-1)][0]
         raise StackFileError(f"{where}: {shown if shown is not None else repr(float(bad))} is invalid: {key} must be "
-                             f"{allowed_values(key)}")
+                             f"{allowed_values(key, gravity)}")

@@ -52,7 +52,7 @@ import numpy as np
 
 from .constants import INDEPENDENT_BELOW
 from .errors import StackFileError
-from .keys import Slot, check_values, quantity_of, read_bounds, read_entry, resolve, valid_values
+from .keys import Slot, check_design_follows, check_values, quantity_of, read_bounds, read_entry, resolve, valid_values
 from .stackfile import StackSpec, load_stack_file
 from .units import parse_quantity
 
@@ -154,6 +154,7 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
     key, index = item["key"], item.get("index")
     n = spec.n or 3
     resolve(key, index, n=n, ground=spec.has_ground, where=where)  # the key and its indices
+    check_design_follows(spec, key, f"{where}.key")
     dim, p = quantity_of(spec, key, index, where)
     q = lambda raw, k: parse_quantity(raw, dim, f"{where}.{k}", exponent=p)  # noqa: E731
     # the keys of this kind of axis only (a key that does not apply would be silently ignored)
@@ -177,7 +178,7 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
             if not isinstance(raw, list) or not raw:
                 raise _err(f"{where}.values", f"{raw!r} is invalid: a non-empty list of values with units")
             values = tuple(q(v, "values") for v in raw)
-            check_values(key, values, f"{where}.values")
+            check_values(key, values, f"{where}.values", gravity=spec.drop.gravity)
             if len(set(values)) != len(values):
                 raise _err(f"{where}.values", f"{raw!r} repeats a value; give each value once")
         else:
@@ -198,10 +199,10 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
             if space == "log" and not (a > 0 and b > 0):
                 raise _err(f"{where}.start", "a log axis needs start and stop > 0")
             values = tuple((np.geomspace(a, b, num) if space == "log" else np.linspace(a, b, num)).tolist())
-            check_values(key, [a, b], f"{where}.start")
+            check_values(key, [a, b], f"{where}.start", gravity=spec.drop.gravity)
     elif sample in ("sobol", "lhs"):
         bounds = read_bounds(item.get("bounds"), dim, f"{where}.bounds", p)
-        check_values(key, bounds, f"{where}.bounds", shown=repr(item["bounds"]))
+        check_values(key, bounds, f"{where}.bounds", shown=repr(item["bounds"]), gravity=spec.drop.gravity)
     else:  # montecarlo
         distribution = item.get("distribution", "normal")
         if distribution not in DISTRIBUTIONS:
@@ -214,7 +215,7 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
                 raise _err(f"{where}.std", f"{item['std']!r} is invalid: must be > 0")
         else:
             bounds = read_bounds(item.get("bounds"), dim, f"{where}.bounds", p)
-            check_values(key, bounds, f"{where}.bounds", shown=repr(item["bounds"]))
+            check_values(key, bounds, f"{where}.bounds", shown=repr(item["bounds"]), gravity=spec.drop.gravity)
     return AxisSpec(key, index, values, bounds, distribution, std, where)
 
 
@@ -431,7 +432,7 @@ def _evaluate(text: str, source: str | None, c: int, rows: int | None = None) ->
     V = plan.values(c)
     # a sampled value outside what its key allows (a Monte-Carlo tail: a negative gap or mass) is not
     # simulated: its design is reported failed (grid values and bounds were checked before the run)
-    valid = np.all([valid_values(a.key, V[:, k]) for k, a in enumerate(plan.sweep.axes)], axis=0)
+    valid = np.all([valid_values(a.key, V[:, k], dm.gravity) for k, a in enumerate(plan.sweep.axes)], axis=0)
     X = np.repeat(np.where(valid[:, None], V, plan.base[None, :]), widths, axis=1)  # an axis sets its slots
     B = X.shape[0]
     size = plan.chunk_rows * plan.row  # pad to the full chunk: one compiled shape for every chunk
@@ -464,7 +465,10 @@ def _evaluate(text: str, source: str | None, c: int, rows: int | None = None) ->
     rigid_event = _event_driven_gains(masses, states, stacks, e_rig, rigid_ok, dm.ground, speed)
     from .constants import G0
 
-    peak_a = sol.peak_forces[:, -1] / masses[:, -1]  # the top mass has one contact: the interface below it
+    # the top mass has one contact: the interface below it; a top never struck has no pulse (NaN, as the
+    # report's `top_pulse` is None; a review: 0 g, and regime "independent", for a run stopped by t_max)
+    struck = np.isfinite(sol.first_contacts[:, -1, 0])
+    peak_a = np.where(struck, sol.peak_forces[:, -1] / masses[:, -1], np.nan)
     # the accelerometer's velocity change (a + g integrated, as the report's pulse): the top's velocity
     # change plus g times the time from its first contact to its launch (its first point in contact is
     # within one onset step, ~1e-7 of the contact time, of the onset)
@@ -482,7 +486,7 @@ def _evaluate(text: str, source: str | None, c: int, rows: int | None = None) ->
            "top_duration_10": sol.top_duration_10 if plan.sweep.durations else np.full(len(X), np.nan),
            "top_rise_time": sol.top_rise_time if plan.sweep.durations else np.full(len(X), np.nan),
            "restitution": sol.restitutions, "overlap_fraction": overlap,
-           "regime": (overlap >= INDEPENDENT_BELOW).astype(np.int8)}
+           "regime": np.where(struck, overlap >= INDEPENDENT_BELOW, -1).astype(np.int8)}
     if plan.dims == ("design",):
         out["values"] = V
     out = {k: np.asarray(v)[:B] for k, v in out.items()}
@@ -545,6 +549,7 @@ def _fingerprint(text: str) -> str:
 def _create_store(path: Path, plan: _Plan, text: str, source: str | None) -> None:
     """The store's layout, coordinates and attributes (no results yet)."""
     import datetime
+    import tomllib
 
     import xarray as xr
 
@@ -585,7 +590,7 @@ def _create_store(path: Path, plan: _Plan, text: str, source: str | None) -> Non
                                 flag_meanings=" ".join(["not_run"] + [x.text.replace(":", "").replace(" ", "_")
                                                                       for x in Status]))
     data["regime"].attrs.update(flag_values=np.array([-1, 0, 1], np.int8),
-                                flag_meanings="not_run_or_not_simulated independent overlapping")
+                                flag_meanings="undetermined independent overlapping")
     data["chunk_done"] = xr.Variable(("chunk",), np.zeros(plan.n_chunks, np.int8),
                                      attrs={"units": "1", "long_name": "1 where the work chunk's results are written"})
     import importlib.metadata as md
@@ -595,6 +600,7 @@ def _create_store(path: Path, plan: _Plan, text: str, source: str | None) -> Non
         "title": "hertz_chain sweep", "Conventions": "CF-1.10", "source": f"hertz_chain {__version__}",
         "history": f"{datetime.datetime.now(datetime.timezone.utc).isoformat()} hertz-chain sweep {source or ''}",
         "stack_file": text, "stack_file_sha256": _fingerprint(text), "versions": json.dumps(versions),
+        "stack_title": str(tomllib.loads(text).get("title", "")),
         "chunk_rows": plan.chunk_rows, "n_chunks": plan.n_chunks})
     # fill values: what a design not computed yet reads (-1 for the integers, NaN for the floats; Zarr's
     # default 0 read as status "complete" and regime "independent" in a store still being written)
@@ -825,7 +831,8 @@ def sweep(path: str | Path, output: str | Path, *, workers: int | None = None, s
 
     **Arguments:** `workers`: run the chunks on a local Dask cluster of that many worker processes;
     `scheduler`: the address of an existing Dask scheduler (`tcp://host:port`); neither: in this process,
-    every CPU core a JAX device (`simulate_batch` splits each chunk over them). `progress`: a rich
+    every CPU core a JAX device (`simulate_batch` solves each chunk in pieces of `simulation.CPU_PIECE`
+    designs, a thread per core taking the next piece; docs/sweeps.md, "Scale"). `progress`: a rich
     progress bar on stderr. `on_chunk(done, todo, seconds)`: called after every chunk written in this
     run (the command line prints a time estimate from the first).
 

@@ -226,7 +226,7 @@ def test_cli_fit_writes_a_stack_file_that_simulates_to_the_fit(files, tmp_path):
     # bounds outside what the key allows are refused before any solve, as optimize's are (were a traceback
     # from inside the solve, exit 1, or a scipy ValueError)
     (["--set", 'fit.vary=[{key="contact.restitution", index=0, bounds=[0.5, 1.5]}]'],
-     "fit.vary[0].bounds: [0.5, 1.5] is invalid: contact.restitution must be > 0 and <= 1"),
+     "fit.vary[0].bounds: [0.5, 1.5] is invalid: contact.restitution must be >= 0.001 and <= 1"),
     (["--set", 'fit.vary=[{key="stack.masses", index=0, bounds=["-1 kg", "1 kg"]}]'],
      "is invalid: stack.masses must be > 0"),
 ])

@@ -320,7 +320,7 @@ def test_mvg_design_other_pairs_and_optimal_n():
 
 def test_met_design():
     d = parse_stack(patched({"stack.masses": DELETE, "stack.design": {"kind": "met", "n": 10, "bottom_mass": 8.4}})).stack.design
-    assert d == DesignSpec("met", 10, 0.8, 8.4, None, None)
+    assert d == DesignSpec("met", 10, 0.8, 8.4, None, None, restitution_given=False)  # e: contact.restitution
     d = parse_stack(design(kind="met", mass_ratio=0.1, bottom_mass=1.0)).stack.design
     assert d.n is None and close(d.top_mass, 0.1)
     err = design(kind="met", n=10, bottom_mass=8.4, mass_ratio=0.012)
