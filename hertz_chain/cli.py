@@ -503,6 +503,7 @@ def check(
     as_json: bool = typer.Option(False, "--json", help="Print the result as JSON."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Draw the pulse inside its band (PNG)."),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing plot."),
+    strict: bool = typer.Option(False, "--strict", help="Exit 1 when nothing was judged (no tolerance, band or SRS tolerance)."),
     overrides: list[str] = _SET,
 ) -> None:
     """Check the top pulse against a shock-test condition: peak, duration, velocity change, band (exit 1 on FAIL)."""
@@ -564,7 +565,9 @@ def check(
         raise typer.Exit(code=status.exit_code)
     if result.passed is None:
         typer.echo("hertz-chain: note: nothing was judged (no tolerance, band or SRS tolerance given): the values "
-                   "are reported only", err=True)
+                   "are reported only" + ("; --strict: exit 1" if strict else ""), err=True)
+        if strict:  # a lab's script reading the exit status would take NOT JUDGED for a pass
+            raise typer.Exit(code=EXIT_CHECK_FAILED)
     elif not result.passed:
         raise typer.Exit(code=EXIT_CHECK_FAILED)
 

@@ -61,8 +61,9 @@ class Status(enum.IntEnum):
             # a review: "leave it unset" was offered where the default had stopped the run (a struck chain
             # without ground whose lower masses collide long after the top's launch)
             return ("the cascade had not ended at t_max: raise solver.t_max (the default, when unset, may stop a "
-                    "chain without ground whose lower masses go on colliding), or set solver.until = \"launch\" "
-                    "to stop once the top mass's launch is final")
+                    "chain without ground, or a gapped stack without gravity, whose lower masses go on colliding), "
+                    "or set solver.until = \"launch\" to stop once the top mass's launch is final (which can "
+                    "also come after t_max)")
         if self is Status.INCOMPLETE_MAX_STEPS:
             now = "" if max_steps is None else f" (now {max_steps})"
             return (f"the step budget ran out before the run's end (the cascade's end, or t_max with "

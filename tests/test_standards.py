@@ -214,6 +214,9 @@ def test_cli_check_with_nothing_judged_is_not_a_failure(tmp_path):
     res = runner.invoke(app, ["check", str(tmp_path / "s.toml")])
     assert res.exit_code == 0, res.output
     assert "result: NOT JUDGED" in res.stdout and "nothing was judged" in res.stderr
+    # --strict: a script reading the exit status does not take NOT JUDGED for a pass (a review)
+    res = runner.invoke(app, ["check", str(tmp_path / "s.toml"), "--strict"])
+    assert res.exit_code == 1 and "--strict: exit 1" in res.stderr
 
 
 def test_cli_check_fails_with_exit_1_and_bad_input_with_2(tmp_path):
