@@ -133,9 +133,9 @@ def read_pulse_csv(path, *, time_unit: str | None = None, accel_unit: str | None
         return [r for r in csv.reader(io.StringIO("\n".join(block)), delimiter=sep)] if sep else \
             [ln.split() for ln in block], sep
 
-    def numeric(cells):
+    def numeric(cells, sep):
         try:
-            [float(c) for c in cells if c.strip()]
+            [_number(c, sep) for c in cells if c.strip()]
             return True
         except ValueError:
             return False
@@ -148,11 +148,11 @@ def read_pulse_csv(path, *, time_unit: str | None = None, accel_unit: str | None
             return False
 
     header = None
-    first, _ = split(lines[:1])
-    if not numeric(first[0]):
+    first, first_sep = split(lines[:1])
+    if not numeric(first[0], first_sep):
         header, lines = [c.strip() for c in first[0]], lines[1:]
-        below, _ = split(lines[:1])
-        if below and not numeric(below[0]) and not any(_unit_of(h) for h in header):
+        below, below_sep = split(lines[:1])
+        if below and not numeric(below[0], below_sep) and not any(_unit_of(h) for h in header):
             cells = [c.strip() for c in below[0]]
             need_cols = max(time_column, accel_column) + 1
             if len(cells) >= need_cols and is_unit(cells[time_column], TIME_UNITS) \
@@ -190,9 +190,10 @@ def read_pulse_csv(path, *, time_unit: str | None = None, accel_unit: str | None
                                  f"({', '.join(sorted(set(table)))})")
         units[what] = (unit, _factor(unit, table, what, f"{path}: {what} unit"))
     try:
-        data = np.array([[float(r[time_column]), float(r[accel_column])] for r in rows], dtype=float)
+        data = np.array([[_number(r[time_column], dialect), _number(r[accel_column], dialect)] for r in rows],
+                        dtype=float)
     except (ValueError, IndexError):
-        bad = next(i for i, r in enumerate(rows) if not _row_ok(r, time_column, accel_column))
+        bad = next(i for i, r in enumerate(rows) if not _row_ok(r, time_column, accel_column, dialect))
         sep = {";": "';'", ",": "','", None: "spaces"}[dialect]
         raise ParameterError(f"{path}: data row {bad + 1}", (dialect or " ").join(rows[bad]),
                              f"numbers in columns {time_column + 1} and {accel_column + 1} (separated by {sep}, as "
@@ -221,9 +222,16 @@ def read_pulse_csv(path, *, time_unit: str | None = None, accel_unit: str | None
                          units["acceleration"][0], notes)
 
 
-def _row_ok(r, i, j) -> bool:
+def _number(cell: str, sep: str | None) -> float:
+    """A cell's number; in a file separated by ';', a decimal comma (`0,5`, the spreadsheet export of many
+    European labs) read as a point (a review: refused). Not where ',' separates (a quoted "1,000" may be
+    a thousands separator) nor in a file separated by spaces (whose commas make it read as ','-separated)."""
+    return float(cell.replace(",", ".") if sep == ";" else cell)
+
+
+def _row_ok(r, i, j, sep) -> bool:
     try:
-        float(r[i]), float(r[j])
+        _number(r[i], sep), _number(r[j], sep)
         return True
     except (ValueError, IndexError):
         return False

@@ -142,6 +142,12 @@ def test_a_header_in_another_separator_and_a_row_of_units_are_read(tmp_path, fil
     p.write_text("time (ms), a (g)\n0;1\n1;x\n2;3\n")
     with pytest.raises(ParameterError, match=r"data row 2 = '1;x' is invalid: .*separated by ';'"):
         read_pulse_csv(p)
+    # decimal commas, ';'-separated (a European spreadsheet's export; a review: refused)
+    p.write_text("t [ms]; a [g]\n" + "\n".join(f"{float(x)!r};{float(y)!r}".replace(".", ",")
+                                               for x, y in zip(t * 1e3, a)))
+    r = read_pulse_csv(p)
+    np.testing.assert_array_equal(r.t, ref.t)
+    np.testing.assert_array_equal(r.a, ref.a)
 
 
 def test_an_acceleration_unit_off_by_g_is_noted(files, report, tmp_path):
