@@ -34,6 +34,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/sweep.py --output benchmarks/sweep.md
 	$(BIN)/python benchmarks/long_chains.py --output benchmarks/long_chains.md
 	$(BIN)/python benchmarks/baselines.py --output benchmarks/baselines.md --json benchmarks/baselines.json
+	$(BIN)/python benchmarks/solver_choice.py --output benchmarks/solver_choice.md
 
 # One sweep of 10^6 designs end to end through the CLI (~10 min on 2 cores): benchmarks/sweep_scale.md.
 bench-scale: $(STAMP)

@@ -68,11 +68,11 @@ def laws(regime: Regime, m: np.ndarray) -> list:
     return out
 
 
-def build(n: int, regime: Regime | str, ratio: float = R_TOTAL, gap: float | None = None):
-    """`(stack, state)` of one case: at impact with the regime's gaps, g = 0."""
+def build(n: int, regime: Regime | str, ratio: float = R_TOTAL, gap: float | None = None, gravity: float = 0.0):
+    """`(stack, state)` of one case: at impact with the regime's gaps, g = 0 unless `gravity` (m/s^2)."""
     regime = REGIMES[regime] if isinstance(regime, str) else regime
     m = masses(n, ratio)
-    stack = hc.Stack(m, laws(regime, m), gravity=0.0)
+    stack = hc.Stack(m, laws(regime, m), gravity=gravity)
     return stack, hc.at_impact(stack, V_IMPACT, regime.gap if gap is None else gap)
 
 
