@@ -144,10 +144,13 @@ def hermite_slope(t, y, dy, t_new) -> np.ndarray:
 
 def parabolic_peak(t, y, i0, i1) -> tuple[float, float]:
     """``(time, value)`` of the vertex of the parabola through the largest sample of ``y`` in ``[i0, i1]``
-    and its two neighbours (the sample itself at an end or on uneven ground): for samples without a
-    derivative, such as contact forces. Error O(h^2) of the local step h."""
+    and its two neighbours (the sample itself at an end of ``[i0, i1]`` or on uneven ground): for samples
+    without a derivative, such as contact forces. Error O(h^2) of the local step h. A force largest at
+    the contact's first sample (a dashpot's jump at first touch, then falling) is that sample: a
+    parabola through the zero force before the contact overshot it (a review: 4.5x a hertz-dashpot
+    contact's peak at e = 0.3)."""
     k = i0 + int(np.argmax(y[i0 : i1 + 1]))
-    if k - 1 < 0 or k + 1 >= len(t):
+    if k - 1 < max(i0, 0) or k + 1 > min(i1, len(t) - 1):
         return float(t[k]), float(y[k])
     (t0, t1, t2), (y0, y1, y2) = t[k - 1 : k + 2], y[k - 1 : k + 2]
     den = (t0 - t1) * (t0 - t2) * (t1 - t2)

@@ -175,11 +175,21 @@ def _integral_to(t: np.ndarray, y: np.ndarray, cum: np.ndarray, tau: float) -> f
     return float(cum[i] + 0.5 * h * (y[i] + y_tau))
 
 
+#: `_refine_peak` refines the peak on a step only where both its ends carry more than this fraction of
+#: the peak (a step from free flight, zero, into a contact whose force jumps is not refined)
+PEAK_STEP_FLOOR = 0.01
+
+
 def _refine_peak(t, v, a, ip, sign, peak, t_peak):
     """Largest `sign·a` of the quadratic `a(t) = v'(t)` of the cubic Hermite interpolant of `v`
-    (values `v`, slopes `a`) on the two steps around sample `ip`; O(h^3) instead of O(h^2)."""
+    (values `v`, slopes `a`) on the two steps around sample `ip`; O(h^3) instead of O(h^2). Only on a
+    step whose two ends are both inside the pulse (`sign·a` above `PEAK_STEP_FLOOR` of the peak): across
+    a contact's onset the acceleration jumps (a dashpot's force is largest at first touch), and the
+    interpolant there overshot (a review: 1155 g for a hertz-dashpot contact whose peak is 866.5 g)."""
     for i in (ip - 1, ip):
         if i < 0 or i + 1 >= t.size:
+            continue
+        if not (sign * a[i] > PEAK_STEP_FLOOR * peak and sign * a[i + 1] > PEAK_STEP_FLOOR * peak):
             continue
         h = t[i + 1] - t[i]
         dv = (v[i + 1] - v[i]) / h
