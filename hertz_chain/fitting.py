@@ -45,7 +45,7 @@ import numpy as np
 
 from .constants import G0
 from .errors import ParameterError, SolverError, StackFileError
-from .keys import KEYS, Slot, check_design_follows, check_values, quantity_of, read_bounds, read_entry, resolve
+from .keys import KEYS, Slot, check_values, quantity_of, read_bounds, read_entry, resolve
 from .status import Status
 
 __all__ = ["FIT_KEYS", "FitParameter", "FitResult", "parse_vary_option", "read_fit_file", "fit"]
@@ -204,7 +204,6 @@ def _parse_fit(raw: Any, spec) -> tuple[list[_Vary], int]:
         read_entry(item, where, _VARY_KEYS, "contact.stiffness")
         key = item["key"]
         resolve(key, None, n=3, ground=True, where=f"{where}.key")
-        check_design_follows(spec, key, f"{where}.key")
         bounds = None
         if "bounds" in item:
             dim, p = quantity_of(spec, key, item.get("index"), where)

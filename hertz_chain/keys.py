@@ -145,20 +145,23 @@ def dimension(spec, key: str, index: object, where: str = "key") -> str:
     return quantity_of(spec, key, index, where)[0]
 
 
-def check_design_follows(spec, key: str, where: str) -> None:
-    """Refuse to vary `contact.restitution` where the file's `[stack.design]` takes its restitution from
-    it and its masses depend on it (an MET design, Eq 25; an optimal n, Eqs 22-24): `simulate --set`
-    redesigns the masses for each e, a vectorised design cannot, and would keep those of the file's e.
-    **Raises** `StackFileError` (one line, at `where`)."""
+def check_design_follows(spec, key: str, index, where: str) -> None:
+    """Refuse a sweep axis on `contact.restitution` of every interface (`index` None) where the file's
+    `[stack.design]` takes its restitution from it and its masses depend on it (an MET design, Eq 25; an
+    optimal n, Eqs 22-24): `simulate --set contact.restitution=...` redesigns the masses for each e, a
+    vectorised design cannot, and would keep those of the file's e. One interface's e (`index`) leaves
+    the design as it is, in `simulate` too; optimize and fit keep the masses fixed by design (a fitted or
+    optimised stack's masses are written out). **Raises** `StackFileError` (one line, at `where`)."""
     d = getattr(spec.stack, "design", None)
-    if key != "contact.restitution" or d is None or d.restitution_given or (d.kind != "met" and d.n is not None):
+    if (key != "contact.restitution" or index is not None or d is None or d.restitution_given
+            or (d.kind != "met" and d.n is not None)):
         return
     how = "an MET design's masses follow from e (Eq 25)" if d.kind == "met" else \
         "the optimal number of masses follows from e (Eqs 22-24)"
     raise StackFileError(f"{where}: contact.restitution cannot vary here: [stack.design] takes its restitution "
                          f"from it, and {how}; the masses would stay those of e = {d.restitution:g} while "
                          "simulate --set redesigns them. Give stack.design.restitution (the masses then stay "
-                         "fixed while the contacts' e varies), or vary the design's files one by one")
+                         "fixed while the contacts' e varies), or run one file per e")
 
 
 def quantity_of(spec, key: str, index: object, where: str = "key") -> tuple[str, float | None]:

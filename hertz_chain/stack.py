@@ -74,8 +74,19 @@ def _traced_rule(a: Array, ok: Array, name: str, allowed: str) -> Array:
     except jax.errors.ConcretizationTypeError:  # under jit or vmap: checked when it runs
         return jnp.where(ok, a, jnp.nan)
     if known_bad:
-        raise ParameterError(name, "traced", f"{allowed}: the traced value breaks the rule")
+        raise ParameterError(name, _primal(a), f"{allowed} (a traced value, under jax.grad or jax.jacfwd)")
     return a
+
+
+def _primal(a):
+    """The value under a traced `a` where the trace carries it (plain `jax.grad`/`jax.jacfwd`), for
+    messages; "traced" otherwise."""
+    while isinstance(a, jax.core.Tracer) and hasattr(a, "primal"):
+        a = a.primal
+    if isinstance(a, jax.core.Tracer):
+        return "traced"
+    v = np.asarray(a)
+    return float(v) if v.ndim == 0 else v.tolist()
 
 
 def _real_array(value: ArrayLike, name: str, shape: tuple | None = None) -> Array:

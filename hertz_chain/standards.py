@@ -556,6 +556,9 @@ def parse_test(raw, standard: str | None = None) -> TestSpec:
             raise StackFileError(f"test.band: {b!r} is invalid: the band's half-width as a fraction of the peak, "
                                  "in (0, 1), e.g. 0.2")
         over["band"] = float(b)
+    if "band_window" in raw and "band" not in raw:
+        raise StackFileError("test.band_window: used only with test.band (the band's half-width); give band, "
+                             "e.g. 0.2, or leave band_window out")
     if "band_window" in raw:
         w = raw["band_window"]
         if (not isinstance(w, list) or len(w) != 2 or any(isinstance(v, bool) or not isinstance(v, (int, float))

@@ -154,7 +154,7 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
     key, index = item["key"], item.get("index")
     n = spec.n or 3
     resolve(key, index, n=n, ground=spec.has_ground, where=where)  # the key and its indices
-    check_design_follows(spec, key, f"{where}.key")
+    check_design_follows(spec, key, index, f"{where}.key")
     dim, p = quantity_of(spec, key, index, where)
     q = lambda raw, k: parse_quantity(raw, dim, f"{where}.{k}", exponent=p)  # noqa: E731
     # the keys of this kind of axis only (a key that does not apply would be silently ignored)

@@ -311,7 +311,7 @@ BASE = {"drop": {"impact_velocity": "1 m/s"}, "stack": {"masses": [1.0, 0.3, 0.1
     ({"vary": [{"key": "stack.masses", "index": [3], "bounds": ["1 g", "1 kg"]}]}, ["end mass", "fix_ends"]),
     ({"vary": [{"key": "stack.masses", "bounds": ["1 kg", "1 g"]}]}, ["bounds", "lower bound must be below"]),
     ({"vary": [{"key": "stack.masses", "bounds": ["1 m", "2 m"]}]}, ["bounds", "mass"]),
-    ({"vary": [{"key": "contact.restitution", "index": [1], "bounds": [0.5, 1.5]}]}, ["> 0 and <= 1"]),
+    ({"vary": [{"key": "contact.restitution", "index": [1], "bounds": [0.5, 1.5]}]}, [">= 0.001 and <= 1"]),
     ({"total_mass": "1 kg", "vary": [{"key": "stack.masses", "bounds": ["1 g", "1 kg"]}]},
      ["total_mass", "infeasible", "1.1"]),
     ({"objective": "pulse", "vary": [{"key": "drop.impact_velocity", "bounds": ["1 m/s", "2 m/s"]}]},

@@ -446,7 +446,7 @@ def test_a_traced_negative_gap_or_drop_speed_raises():
     assert np.isfinite(float(grad(1e-3)))
     with pytest.raises(Exception, match="gaps and drop speed finite and >= 0"):
         float(grad(-1e-3))
-    with pytest.raises(hc.ParameterError, match=r"gaps = 'traced' is invalid: finite and >= 0"):
+    with pytest.raises(hc.ParameterError, match=r"gaps = \[-0.001\] is invalid: finite and >= 0 \(m\) \(a traced value"):
         jax.grad(top)(-1e-3)
     with pytest.raises(Exception, match="gaps and drop speed finite and >= 0"):
         float(jax.jit(lambda v: top(1e-3, v))(-1.0))

@@ -178,9 +178,10 @@ def test_test_section_overrides_the_row():
     ({"standard": "JESD22-B110 B", "peak_tolerance": 200}, "test.peak_tolerance: 200 is invalid: a percentage below 100"),
     ({"standard": "JESD22-B110 B", "duration_tolerance": -30}, "test.duration_tolerance: -30 is invalid"),
     ({"standard": "JESD22-B110 B", "band": 1.5}, "test.band"),
-    ({"standard": "JESD22-B110 B", "band_window": 0.4}, "test.band_window: 0.4 is invalid: [before, after]"),
-    ({"standard": "JESD22-B110 B", "band_window": [-1, 0.4]}, "test.band_window: [-1, 0.4] is invalid"),
-    ({"standard": "JESD22-B110 B", "band_window": [True, 1]}, "test.band_window: [True, 1] is invalid"),
+    ({"standard": "JESD22-B110 B", "band": 0.2, "band_window": 0.4}, "test.band_window: 0.4 is invalid: [before, after]"),
+    ({"standard": "JESD22-B110 B", "band": 0.2, "band_window": [-1, 0.4]}, "test.band_window: [-1, 0.4] is invalid"),
+    ({"standard": "JESD22-B110 B", "band": 0.2, "band_window": [True, 1]}, "test.band_window: [True, 1] is invalid"),
+    ({"standard": "JESD22-B110 B", "band_window": [0.4, 1]}, "test.band_window: used only with test.band"),
     ({"standard": "JESD22-B110 B", "duration": "1 kg"}, "test.duration"),
     # an unknown condition names its key (it read "standard = ... is invalid", without the file's key)
     ({"standard": "MIL-STD-883 2002 Z"}, "test.standard: 'MIL-STD-883 2002 Z' is invalid: did you mean"),
