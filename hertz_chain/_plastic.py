@@ -148,7 +148,12 @@ class Thornton(_ElasticPlastic):
         k, p_y = _stiffness(k), _positive(yield_pressure, "yield_pressure")
         R = _positive(effective_radius, "effective_radius")
         e_star = 0.75 * k / math.sqrt(R)
-        return cls(k, R * (math.pi * p_y / (2.0 * e_star)) ** 2, clamp)
+        delta_y = R * (math.pi * p_y / (2.0 * e_star)) ** 2
+        if not delta_y < R:  # a review: p_y = 2e13 Pa put delta_y at 1754 m on a 1 mm radius: pure Hertz, silently
+            raise ParameterError("yield_pressure", p_y, f"below 2 E*/pi = {2 * e_star / math.pi:.4g} Pa (E* = "
+                                 f"{e_star:.4g} Pa from the stiffness and the radius): above it the yield overlap "
+                                 "delta_y = R (pi p_y / (2 E*))^2 exceeds the radius, and the law never yields")
+        return cls(k, delta_y, clamp)
 
     @classmethod
     def from_config(cls, k, *, restitution=None, damping=None, effective_mass=None, calibration_velocity=None,

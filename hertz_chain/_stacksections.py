@@ -43,7 +43,7 @@ from ._stackspec import (
     SRSSpec,
     WallSpec,
 )
-from .constants import MAX_MASSES, UNTIL
+from .constants import MAX_MASSES, POWER_EXPONENTS, UNTIL
 from .registry import LAWS
 from .units import _UNITS, LIMITS, _error, _show, parse_quantity
 
@@ -205,7 +205,8 @@ def _resolve_contact(merged: dict, label: str, *, ground: bool) -> ContactSpec:
     if "exponent" in merged and ("exponent", "dimensionless") in row.params:  # the power law: its stiffness unit
         raw, key = merged["exponent"]
         exponent = parse_quantity(raw, "dimensionless", key)
-        _check(1.0 <= exponent <= 5.0, key, raw, "must be between 1 and 5 (F = k delta^p)")
+        _check(POWER_EXPONENTS[0] <= exponent <= POWER_EXPONENTS[1], key, raw,
+               f"must be between {POWER_EXPONENTS[0]:g} and {POWER_EXPONENTS[1]:g} (F = k delta^p)")
     if "stiffness" in merged:
         raw, key = merged["stiffness"]
         if row.stiffness == "power_stiffness":

@@ -34,6 +34,7 @@ from jaxtyping import Array, ArrayLike
 from . import _config  # noqa: F401  (float64)
 from . import calibration as _cal
 from . import registry as _registry
+from .constants import POWER_EXPONENTS
 from .errors import ParameterError
 from ._law_base import (  # noqa: F401  (the base is part of this module's interface)
     AbstractContactLaw,
@@ -486,8 +487,9 @@ class PowerLaw(AbstractContactLaw):
         """`make_law`'s constructor: ``exponent`` p, and ``alpha = damping`` or calibrated to
         ``restitution`` at ``calibration_velocity`` with ``chi_map``."""
         p = float(_require(exponent, "exponent", cls.name))
-        if not (math.isfinite(p) and p >= 1.0):
-            raise ParameterError("exponent", exponent, "a finite number >= 1")
+        lo, hi = POWER_EXPONENTS
+        if not (math.isfinite(p) and lo <= p <= hi):  # as stack files (a review: make_law took 6, files refused it)
+            raise ParameterError("exponent", exponent, f"a number between {lo:g} and {hi:g} (F = k delta^p)")
         if restitution is None:
             return cls(_stiffness(k), p, damping, clamp)
         v = _positive(_require(calibration_velocity, "calibration_velocity", cls.name), "calibration_velocity")
@@ -565,13 +567,14 @@ def make_law(
       | ``kelvin-voigt`` | ``damping`` (= c, N s/m) | ``effective_mass`` |
       | ``viscoelastic`` | ``A`` or ``damping`` (= A, s) | ``effective_mass``, ``calibration_velocity`` |
       | ``hertz-dashpot`` | ``damping`` (= gamma, N s/m) | ``effective_mass``, ``calibration_velocity`` |
-      | ``power`` | ``alpha`` (s/m); always ``exponent`` p >= 1 (stiffness in N/m^p) | ``calibration_velocity``; ``chi_map`` |
+      | ``power`` | ``alpha`` (s/m); always ``exponent`` 1 <= p <= 5 (stiffness in N/m^p) | ``calibration_velocity``; ``chi_map`` |
       | ``thornton`` | ``yield_pressure`` (Pa) and ``effective_radius`` (m); no ``restitution`` | — |
       | ``jackson-green`` | ``yield_strength`` (Pa), ``effective_radius`` (m), optional ``poisson_ratio``; no ``restitution`` | — |
 
       ``e`` is reproduced exactly (to ~1e-11) in the isolated impact, with or without the clamp
-      (see `hertz_chain.calibration`); for ``hunt-crossley`` and ``viscoelastic`` only at the
-      calibration velocity, since their ``e`` falls as the impact speed rises.
+      (see `hertz_chain.calibration`); for the speed-dependent laws only at the calibration velocity:
+      the ``e`` of ``hunt-crossley``, ``power`` and ``viscoelastic`` falls as the impact speed rises,
+      that of ``hertz-dashpot`` rises (``tsuji`` and ``kelvin-voigt``: the same ``e`` at every speed).
     - ``chi_map``: Hunt–Crossley map name (`calibration.CHI_MAPS`); ``None`` means ``"exact"``.
     - ``clamp``: clamp the force at ``F >= 0`` (default ``True``).
 

@@ -583,6 +583,17 @@ API_ROWS = [
     ("make_law_viscoelastic_cap", lambda: __import__("hertz_chain").make_law("viscoelastic", stiffness=1e9, A=2.0,
                                                                              effective_mass=1.0),
      ParameterError, "A = 2.0 is invalid: at most 1 (A, s)"),
+    # a contact-law review: make_law took what stack files refuse, or what the law cannot be
+    ("make_law_power_exponent_6", lambda: __import__("hertz_chain").make_law("power", stiffness=1e9, alpha=0.1,
+                                                                             exponent=6),
+     ParameterError, "exponent = 6 is invalid: a number between 1 and 5"),
+    ("make_law_restitution_bool", lambda: __import__("hertz_chain").make_law("tsuji", stiffness=1e9, restitution=True,
+                                                                             effective_mass=0.1),
+     ParameterError, "restitution = True is invalid: a number in (0, 1], not a boolean"),
+    # delta_y = R (pi p_y / (2 E*))^2 >= R: the law would never yield (E* = 3 k / (4 sqrt R) = 2.372e10 Pa)
+    ("make_law_thornton_never_yields", lambda: __import__("hertz_chain").make_law(
+        "thornton", stiffness=1e9, yield_pressure=2e13, effective_radius=1e-3),
+     ParameterError, "yield_pressure = 20000000000000.0 is invalid: below 2 E*/pi = 1.51e+10 Pa"),
     # the rigid theory from Python (a review of the rigid model: numpy's own errors, a wrong value shown,
     # an 80 GB array, scipy's "f(a) and f(b) must have different signs")
     ("design_R_string", lambda: __import__("hertz_chain").design(R="abc", e=0.8), ParameterError,
