@@ -79,6 +79,12 @@ DEFAULT_FALL = 0.1
 #: number read in a standard (`test.band_window`, in multiples of D; set it from your standard's figure).
 DEFAULT_BAND_WINDOW = (0.4, 0.4)
 
+#: How the duration criterion reads the pulse (`test.duration_reference`): `"nominal-width"` (default)
+#: compares the width between the pulse's own 10 % points with the nominal pulse's 10 % width (a perfect
+#: pulse of duration D passes with its full margin); `"D"` compares the width between the points at 10 % of
+#: the *specified* peak with D itself, as standards that define the duration so read it.
+DURATION_REFERENCES = ("nominal-width", "D")
+
 SHAPES = {
     "half-sine": (2.0 / math.pi, 1.0 - 2.0 * math.asin(0.1) / math.pi),
     "sawtooth": (0.5, 0.9),
@@ -248,6 +254,7 @@ class TestSpec:
     srs_tolerance_db: tuple[float, float] | None = None  # (below, above) in dB
     srs_q: float = 10.0
     band_window: tuple[float, float] = DEFAULT_BAND_WINDOW  # judged before / after the nominal pulse, in D
+    duration_reference: str = "nominal-width"  # DURATION_REFERENCES
 
     def __post_init__(self):
         if self.fall_time is None and self.shape == "sawtooth":
@@ -341,6 +348,18 @@ class CheckResult:
         return "\n".join(out)
 
 
+def _duration_criterion(t, a, pm, spec: TestSpec) -> Criterion:
+    """The duration criterion as `spec.duration_reference` reads it (`DURATION_REFERENCES`): the pulse's
+    own 10 % width against the nominal pulse's, or the width at 10 % of the specified peak against D
+    (zero where the pulse never reaches that level)."""
+    if spec.duration_reference == "nominal-width":
+        return _judge("duration (10 %)", "ms", pm.duration_10 * 1e3,
+                      nominal_width_10(spec.shape, spec.duration) * 1e3, spec.duration_tolerance)
+    level = 0.1 * spec.peak_g / pm.peak_g  # 10 % of the specified peak, as a fraction of the pulse's own
+    width = pulse_metrics(t, a, duration_level=level).duration_10 if level < 1 else 0.0
+    return _judge("duration (10 % of A)", "ms", width * 1e3, spec.duration * 1e3, spec.duration_tolerance)
+
+
 def _judge(name, unit, value, nominal, tol) -> Criterion:
     if tol is None:
         return Criterion(name, unit, float(value), float(nominal), None, None, None, None)
@@ -395,8 +414,7 @@ def check_pulse(t, a, spec: TestSpec) -> CheckResult:
     peak_nom = spec.peak_g * G0
     crit = [
         _judge("peak", "g", pm.peak_g, spec.peak_g, spec.peak_tolerance),
-        _judge("duration (10 %)", "ms", pm.duration_10 * 1e3, nominal_width_10(spec.shape, spec.duration) * 1e3,
-               spec.duration_tolerance),
+        _duration_criterion(t, a, pm, spec),
         _judge("velocity change", "m/s", abs(pm.delta_v_main), nominal_delta_v(spec.shape, peak_nom, spec.duration),
                spec.velocity_tolerance),
     ]
@@ -445,7 +463,8 @@ def check_pulse(t, a, spec: TestSpec) -> CheckResult:
 # ------------------------------------------------------------------------------------------ files
 #: Keys of a stack file's `[test]` section.
 TEST_KEYS = ("standard", "shape", "peak_g", "duration", "peak_tolerance", "duration_tolerance",
-             "velocity_tolerance", "band", "band_window", "fall_time", "srs", "srs_tolerance_db", "srs_q")
+             "duration_reference", "velocity_tolerance", "band", "band_window", "fall_time", "srs",
+             "srs_tolerance_db", "srs_q")
 
 
 def _tolerance(raw, key: str) -> tuple[float, float]:
@@ -556,6 +575,13 @@ def parse_test(raw, standard: str | None = None) -> TestSpec:
             raise StackFileError(f"test.band: {b!r} is invalid: the band's half-width as a fraction of the peak, "
                                  "in (0, 1), e.g. 0.2")
         over["band"] = float(b)
+    if "duration_reference" in raw:
+        ref = raw["duration_reference"]
+        if ref not in DURATION_REFERENCES:
+            raise StackFileError(f"test.duration_reference: {ref!r} is invalid; allowed: "
+                                 f"{', '.join(DURATION_REFERENCES)} (the pulse's 10 % width against the nominal "
+                                 "pulse's, or the width at 10 % of the specified peak against D)")
+        over["duration_reference"] = ref
     if "band_window" in raw and "band" not in raw:
         raise StackFileError("test.band_window: used only with test.band (the band's half-width); give band, "
                              "e.g. 0.2, or leave band_window out")

@@ -347,3 +347,31 @@ def test_the_band_is_judged_before_and_after_the_pulse_over_its_window():
     assert notes[0].startswith("the record leaves the band outside the judged window: +750 g at +1.75 ms")
     c, notes = band(a + second, band_window=[0.4, 3])
     assert not c.passed and c.margin == pytest.approx(-450.0, abs=1e-3) and notes == ()
+
+
+def test_the_duration_read_at_ten_percent_of_the_specified_peak_against_D():
+    """`duration_reference = "D"`: the width between the points at 10 % of the specified peak A, against D
+    itself (a review: standards that define the duration so read it; the default compares the pulse's own
+    10 % width with the nominal pulse's). A half-sine of base width W and peak P crosses q = 0.1 A / P at
+    W (1 - 2 asin(q) / pi) (closed form). W = D, P = A: 0.93623 D, -6.4 % (the default reads it exact);
+    P = 1.25 A: q = 0.08, W (1 - 2 asin(0.08) / pi) = 0.94903 D; a pulse below 10 % of A: width 0."""
+    D = 5e-4
+    t = np.linspace(0, 1.5e-3, 60001)  # dt = 25 ns: the crossings linear between samples to ~1e-9 D
+
+    def width(scale, **over):
+        a = scale * nominal_pulse("half-sine", 1500 * G0, D, t - 3e-4)
+        r = check_pulse(t, a, parse_test({"shape": "half-sine", "peak_g": 1500, "duration": "0.5 ms",
+                                          "duration_tolerance": 5} | over))
+        (c,) = [c for c in r.criteria if c.name.startswith("duration")]
+        return c
+
+    c = width(1.0)
+    assert c.name == "duration (10 %)" and c.value == pytest.approx(c.nominal, rel=1e-7) and c.passed
+    c = width(1.0, duration_reference="D")
+    assert c.name == "duration (10 % of A)" and c.nominal == pytest.approx(0.5)
+    assert c.value == pytest.approx(0.5 * (1 - 2 * math.asin(0.1) / math.pi), rel=1e-7) and not c.passed
+    c = width(1.25, duration_reference="D")
+    assert c.value == pytest.approx(0.5 * (1 - 2 * math.asin(0.08) / math.pi), rel=1e-7)
+    assert width(0.05, duration_reference="D").value == 0.0
+    with pytest.raises(StackFileError, match="test.duration_reference: 'd' is invalid; allowed: nominal-width, D"):
+        parse_test({"standard": "JESD22-B110 B", "duration_reference": "d"})
