@@ -239,9 +239,9 @@ def _rigid_comparison(sol, e_meas, e_nom, v_ref) -> RigidComparison:
     return RigidComparison(nominal, measured, event, e_nom, e_meas, tuple(notes))
 
 
-def _pulse(t, a, v) -> PulseMetrics | None:
+def _pulse(t, a, v, smooth=None) -> PulseMetrics | None:
     try:
-        return pulse_metrics(t, a, velocity=v)
+        return pulse_metrics(t, a, velocity=v, smooth=smooth)
     except HertzChainError:
         return None  # e.g. a mass that never felt a contact
 
@@ -384,7 +384,16 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
         starts = [ep.start for ep in rebounds if ep.interface in (i, i + 1)]
         return st.t < min(starts) if starts else np.ones(st.t.shape, dtype=bool)
 
-    pulses = tuple(_pulse(st.t[cut(i)], a_contact[cut(i), i], v_contact[cut(i), i]) for i in range(n))
+    def smooth(i, sel):  # the steps across which none of mass i's contacts (below, above, a wall) opens or closes
+        cols = [j for j in (i, i + 1) if j < closed.shape[1]]
+        shut = closed[sel][:, cols]
+        if stack.wall and i == n - 1:
+            shut = np.concatenate([shut, wall_closed[sel][:, None]], axis=1)
+        return ~np.any(shut[1:] != shut[:-1], axis=1)
+
+    wall_closed = (np.asarray(stack.wall_force(np.asarray(st.positions)), dtype=float) > 0) if stack.wall else None
+    pulses = tuple(_pulse(st.t[cut(i)], a_contact[cut(i), i], v_contact[cut(i), i], smooth(i, cut(i)))
+                   for i in range(n))
     # the top mass's own contact only: interface n - 1 (its neighbour below, or the ground when n = 1)
     top_if = {n - 1} if (n >= 2 or ground) else set()
     keep = cut(n - 1)

@@ -193,6 +193,7 @@ def _law(cs: ContactSpec, stiffness: float, m_eff: float, v_c: float | None,
          radius: float | None = None, limit: YieldLimit | None = None) -> AbstractContactLaw:
     params = dict(cs.params)
     row = LAWS[cs.law]
+    from_materials = [key for key in row.from_materials if key not in params]
     for key in row.from_materials:  # e.g. thornton's yield_pressure from the softer body's Y
         if key not in params:
             if limit is None:
@@ -203,9 +204,19 @@ def _law(cs: ContactSpec, stiffness: float, m_eff: float, v_c: float | None,
     for key in row.context:  # e.g. jackson-green's Poisson ratio, the yielding body's when known
         if limit is not None:
             params[key] = getattr(limit, key)
-    return make_law(cs.law, stiffness=stiffness, restitution=cs.restitution, effective_mass=m_eff,
-                    calibration_velocity=v_c, chi_map=cs.chi_map, alpha=cs.alpha, damping=cs.damping,
-                    clamp=cs.clamp, effective_radius=radius, **params)
+    try:
+        return make_law(cs.law, stiffness=stiffness, restitution=cs.restitution, effective_mass=m_eff,
+                        calibration_velocity=v_c, chi_map=cs.chi_map, alpha=cs.alpha, damping=cs.damping,
+                        clamp=cs.clamp, effective_radius=radius, **params)
+    except ParameterError as exc:  # a value the file did not give: say where it came from (a review: steel
+        # on polyurethane read "yield_pressure = 3248000000.0 is invalid", a key the file never set)
+        if exc.name not in from_materials or limit is None:
+            raise
+        raise StackFileError(f"{cs.source} (interface {limit.interface}): law {cs.law!r}: the {exc.name} from "
+                             f"the materials, {exc.value:.4g} Pa (1.6 x {limit.material}'s yield strength), is "
+                             f"invalid: {exc.allowed}; the other body is far softer and takes the impact "
+                             "elastically: give this interface an elastic or viscoelastic law, or give "
+                             f"{exc.name} yourself") from None
 
 
 def _nominal_e(cs: ContactSpec, stiffness: float, m_eff: float) -> float:

@@ -116,7 +116,7 @@ def check_restitution(e: float, name: str = "restitution", minimum: float = 0.0)
 
     if _traced(e):
         raise ParameterError(name, "a traced value", TRACED)
-    if isinstance(e, (bool, np.bool_)):  # True read as e = 1 (a review)
+    if isinstance(e, (bool, np.bool_)) or getattr(e, "dtype", None) == bool:  # True read as e = 1 (a review)
         raise ParameterError(name, e, "a number in (0, 1], not a boolean")
     try:
         ef = float(e)

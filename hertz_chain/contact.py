@@ -486,6 +486,8 @@ class PowerLaw(AbstractContactLaw):
                     chi_map="exact", clamp=True, exponent=None) -> "PowerLaw":
         """`make_law`'s constructor: ``exponent`` p, and ``alpha = damping`` or calibrated to
         ``restitution`` at ``calibration_velocity`` with ``chi_map``."""
+        if isinstance(exponent, (bool, np.bool_)):  # True read as p = 1 (a review)
+            raise ParameterError("exponent", exponent, "a number between 1 and 5, not a boolean")
         p = float(_require(exponent, "exponent", cls.name))
         lo, hi = POWER_EXPONENTS
         if not (math.isfinite(p) and lo <= p <= hi):  # as stack files (a review: make_law took 6, files refused it)

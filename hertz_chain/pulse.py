@@ -180,14 +180,15 @@ def _integral_to(t: np.ndarray, y: np.ndarray, cum: np.ndarray, tau: float) -> f
 PEAK_STEP_FLOOR = 0.01
 
 
-def _refine_peak(t, v, a, ip, sign, peak, t_peak):
+def _refine_peak(t, v, a, ip, sign, peak, t_peak, smooth=None):
     """Largest `sign·a` of the quadratic `a(t) = v'(t)` of the cubic Hermite interpolant of `v`
     (values `v`, slopes `a`) on the two steps around sample `ip`; O(h^3) instead of O(h^2). Only on a
     step whose two ends are both inside the pulse (`sign·a` above `PEAK_STEP_FLOOR` of the peak): across
     a contact's onset the acceleration jumps (a dashpot's force is largest at first touch), and the
-    interpolant there overshot (a review: 1155 g for a hertz-dashpot contact whose peak is 866.5 g)."""
+    interpolant there overshot (a review: 1155 g for a hertz-dashpot contact whose peak is 866.5 g); and,
+    with `smooth` (one boolean per step), only on smooth steps."""
     for i in (ip - 1, ip):
-        if i < 0 or i + 1 >= t.size:
+        if i < 0 or i + 1 >= t.size or (smooth is not None and not smooth[i]):
             continue
         if not (sign * a[i] > PEAK_STEP_FLOOR * peak and sign * a[i + 1] > PEAK_STEP_FLOOR * peak):
             continue
@@ -230,6 +231,7 @@ def pulse_metrics(
     *,
     delta_v: float | None = None,
     velocity=None,
+    smooth=None,
     duration_level: float = 0.1,
     rise_levels: tuple[float, float] = (0.1, 0.9),
     pulse_threshold: float = 0.1,
@@ -245,7 +247,12 @@ def pulse_metrics(
     - `velocity`: optional exact running integral of `a` at the samples (m/s; e.g. the simulated
       velocity `v + g t` of the mass). When given, ΔV and the main-lobe ΔV use it instead of the
       trapezoid rule, so they are exact at the samples (only the lobe ends, where `a ≈ 0`, are
-      interpolated).
+      interpolated). The peak is then refined between the samples (the slope of the velocity's cubic
+      Hermite interpolant).
+    - `smooth`: optional booleans, one per step between samples (`(len(t) - 1,)`): whether the
+      acceleration is smooth across it (no contact of the mass opens or closes inside it); the peak is
+      refined only on smooth steps (across a contact's kink the interpolant overshoots: a middle mass
+      pushed by a dashpot contact read +9.8 %, a review).
     - `duration_level`: level of the duration points, as a fraction of the peak (0.1).
     - `rise_levels`: the two levels of the rise time (0.1, 0.9).
     - `pulse_threshold`: threshold fraction of the peak that defines separate pulses (0.1).
@@ -304,7 +311,12 @@ def pulse_metrics(
 
     t_peak = float(t[ip])
     if velocity is not None:  # refine the peak between samples: a = d/dt of v's cubic Hermite
-        peak, t_peak = _refine_peak(t, cum, a, ip, sign, peak, t_peak)
+        ok = None
+        if smooth is not None:
+            ok = np.asarray(smooth, dtype=bool)
+            if ok.shape != (t.size - 1,):
+                raise ParameterError("smooth", ok.shape, f"one boolean per step between samples, shape ({t.size - 1},)")
+        peak, t_peak = _refine_peak(t, cum, a, ip, sign, peak, t_peak, ok)
 
     return PulseMetrics(
         peak=peak,

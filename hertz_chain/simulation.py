@@ -388,15 +388,28 @@ def _grow(a, size: int):
 
 
 def _invalid_designs(stacks: Stack, states: State) -> np.ndarray | None:
-    """`(B,)` the designs of a batch that cannot be solved: a mass not finite and > 0, or a non-finite
-    number anywhere in the stack or the state (values set past `Stack`'s checks, e.g. by `jax.vmap`ped
-    constructors or `eqx.tree_at`). None under a trace (nothing to read)."""
+    """`(B,)` the designs of a batch that cannot be solved: a mass not finite and > 0, a gravity not
+    finite and >= 0, a law parameter outside its rule (`AbstractContactLaw.field_rules`: a stiffness > 0,
+    a damping >= 0, ...), or a non-finite number anywhere in the stack or the state (values set past
+    `Stack`'s checks, e.g. by `jax.vmap`ped constructors or `eqx.tree_at`; the rules `_design_invalid`
+    checks for a traced single design). None under a trace (nothing to read)."""
     leaves = [a for a in jax.tree.leaves((stacks, states)) if eqx.is_array(a)]
     if any(isinstance(a, jax.core.Tracer) for a in leaves):
         return None
     m = np.asarray(stacks.masses)
     bad = ~np.all(np.isfinite(m) & (m > 0), axis=1)
     B = m.shape[0]
+
+    def per_design(ok):  # `ok` of one design's array, or of all designs' at once (leading axis B)
+        ok = np.asarray(ok)
+        return np.all(ok.reshape(B, -1), axis=1) if ok.ndim and ok.shape[0] == B else np.full(B, bool(np.all(ok)))
+
+    g = np.asarray(stacks.gravity, dtype=float)
+    bad |= ~per_design(np.isfinite(g) & (g >= 0))  # a review: gravity -9.8 in a batch ran "complete"
+    for law in stacks.laws:  # a review: a negative stiffness in a batch came back "complete" with NaN
+        for field, (lowest, strict, _) in law.field_rules.items():
+            a = np.asarray(getattr(law, field), dtype=float)
+            bad |= ~per_design(np.isfinite(a) & ((a > lowest) if strict else (a >= lowest)))
     for a in leaves:
         a = np.asarray(a)
         if a.ndim and a.shape[0] == B and np.issubdtype(a.dtype, np.inexact):

@@ -257,6 +257,10 @@ class TestSpec:
     duration_reference: str = "nominal-width"  # DURATION_REFERENCES
 
     def __post_init__(self):
+        if self.duration_reference not in DURATION_REFERENCES:
+            from .errors import ParameterError
+
+            raise ParameterError("duration_reference", self.duration_reference, f"one of {', '.join(DURATION_REFERENCES)}")
         if self.fall_time is None and self.shape == "sawtooth":
             object.__setattr__(self, "fall_time", DEFAULT_FALL * self.duration)
 
@@ -338,7 +342,7 @@ class CheckResult:
             margin = "" if c.margin is None else f" margin {c.margin:+.4g} {c.unit}"
             nominal = "" if c.name in ("band", "SRS") else f" (nominal {c.nominal:.5g})"
             what = {"band": "largest excursion", "SRS": "deviation"}.get(c.name, "")
-            out.append(f"  {c.name:<16} {what + ' ' if what else ''}{c.value:.5g} {c.unit}{nominal} {rng}{margin} "
+            out.append(f"  {c.name:<20} {what + ' ' if what else ''}{c.value:.5g} {c.unit}{nominal} {rng}{margin} "
                        f"{verdict}".rstrip())
         out.append(f"result: {self.verdict}" + (" (no tolerance given: add test.peak_tolerance, "
                                                  "duration_tolerance, velocity_tolerance, band, or srs with "

@@ -199,7 +199,8 @@ def _parse_axis(item: Any, i: int, spec: StackSpec, sample: str | None) -> AxisS
             if space == "log" and not (a > 0 and b > 0):
                 raise _err(f"{where}.start", "a log axis needs start and stop > 0")
             values = tuple((np.geomspace(a, b, num) if space == "log" else np.linspace(a, b, num)).tolist())
-            check_values(key, [a, b], f"{where}.start", gravity=spec.drop.gravity)
+            check_values(key, [a], f"{where}.start", gravity=spec.drop.gravity)
+            check_values(key, [b], f"{where}.stop", gravity=spec.drop.gravity)
     elif sample in ("sobol", "lhs"):
         bounds = read_bounds(item.get("bounds"), dim, f"{where}.bounds", p)
         check_values(key, bounds, f"{where}.bounds", shown=repr(item["bounds"]), gravity=spec.drop.gravity)

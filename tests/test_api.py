@@ -81,6 +81,19 @@ def test_cpu_computations_run_inline_unless_the_user_chose():
     assert _devices_in_subprocess({}, started) == 1
 
 
+@pytest.mark.parametrize("code", ["import hertz_chain, jax.numpy as jnp", "import jax.numpy as jnp, hertz_chain"])
+def test_the_cores_and_inline_dispatch_hold_when_the_first_array_is_the_users(code):
+    """A review: a user's first JAX array (Monte-Carlo samples drawn with jax.random) made before any
+    hertz_chain function left one device and JAX's asynchronous dispatch (batches 2.1x, prepared calls
+    1.7-3x slower); `import hertz_chain` sets both now, before or after `import jax`, without importing JAX
+    itself (an import hook runs `_config` right after JAX's own import)."""
+    flag = "int(jax.config.values['jax_cpu_enable_async_dispatch'])"
+    probe = code + f"; import jax; jnp.zeros(1); print(jax.local_device_count() * 10 + {flag})"
+    assert _devices_in_subprocess({"HERTZ_CHAIN_CPU_DEVICES": "3"}, probe) == 30
+    # and `import hertz_chain` alone still does not import JAX (the command line's start-up)
+    assert _devices_in_subprocess({}, "import sys, hertz_chain; print(int('jax' in sys.modules))") == 0
+
+
 def test_a_renamed_name_fails_with_its_new_name():
     # CHANGELOG.md's table: the old public names point to the new ones
     import pytest

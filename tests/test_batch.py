@@ -143,6 +143,24 @@ def test_designs_past_the_checks_fail_without_being_solved(save_steps):
     assert np.all(np.isnan(none.launch_velocities))
 
 
+def test_designs_whose_law_or_gravity_breaks_its_rule_fail_without_being_solved():
+    """A review: a negative stiffness set past the law's check (a tolerance sample of k through
+    `jax.vmap`) came back "complete" with NaN launch velocities, and a negative gravity "complete" with
+    plausible numbers. The batch now checks what `launch_velocity` checks of a traced design (gravity
+    finite and >= 0, each law's `field_rules`): both `failed` with NaN results and no steps; the valid
+    designs beside them give paper Eq 19, v_top / v = 2 (2 / (1 + r)) - 1, to 1e-8."""
+    M = jnp.array([[1.0, 0.3], [1.0, 0.3], [1.0, 0.3], [1.0, 0.5]])
+    K = jnp.array([1e9, -1e9, 1e9, 1e9])
+    G = jnp.array([0.0, 0.0, -9.8, 0.0])
+    stacks = jax.vmap(lambda m, k, g: Stack(m, HuntCrossley(k, 0.0), gravity=g))(M, K, G)
+    states = jax.vmap(lambda s: at_impact(s, 1.0, 0.01))(stacks)
+    b = simulate_batch(stacks, states, tolerances=TIGHT, save_steps=False)
+    assert b.status_code.tolist() == [0, 5, 5, 0]
+    assert np.all(np.isnan(b.launch_velocities[1:3])) and np.all(b.num_steps[1:3] == 0)
+    for i, r in ((0, 0.3), (3, 0.5)):
+        assert b.launch_velocities[i, -1] == pytest.approx(2 * (2 / (1 + r)) - 1, rel=1e-8)
+
+
 def test_cpu_pieces_give_the_same_numbers_on_any_number_of_cores(monkeypatch):
     """A design's piece and companions do not depend on the cores (`simulation._solve_pieces`): the same
     seven designs in pieces of three, by one thread and by two, give bit-for-bit equal results (a sweep's

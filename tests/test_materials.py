@@ -2,6 +2,7 @@
 
 import csv
 import math
+import re
 
 import pytest
 
@@ -139,3 +140,22 @@ def test_bad_parameters(call, param):
 def test_incompressible_limit_allowed():
     # nu = 1/2 is the incompressible limit (rubber-like); -1 < nu <= 1/2 for isotropic solids
     assert Material("rubber", 2e6, 0.5).plane_strain_compliance == pytest.approx(0.75 / 2e6)
+
+
+def test_a_yield_pressure_from_the_materials_that_never_yields_names_where_it_came_from(tmp_path):
+    """A review: steel on polyurethane with `law = "thornton"` ran as pure Hertz (the steel's yield pressure,
+    1.6 Y = 3.248 GPa, far above the pair's 2 E*/pi, so delta_y = R (pi p_y / 2E*)^2 exceeds the radius);
+    refused now, and the message says the value came from the materials (the file never set it)."""
+    from hertz_chain.errors import StackFileError
+    from hertz_chain.materials import material
+    from hertz_chain.stackfile import load_stack_file
+    from hertz_chain.builder import build
+
+    p = tmp_path / "s.toml"
+    p.write_text('[drop]\nimpact_velocity = "1 m/s"\n[stack]\nmasses = [1.0]\nradius = "1 cm"\nmaterial = "steel-52100"\n'
+                 '[ground]\nmaterial = "polyurethane-90a"\n[contact]\nlaw = "thornton"\n')
+    p_y = 1.6 * material("steel-52100").yield_strength
+    with pytest.raises(StackFileError, match=rf"contact \(interface 0\): law 'thornton': the yield_pressure from the "
+                                             rf"materials, {re.escape(f'{p_y:.4g}')} Pa \(1.6 x steel-52100's yield strength\), is "
+                                             r"invalid: below 2 E\*/pi"):
+        build(load_stack_file(p))
