@@ -849,8 +849,9 @@ def prepare_launch(
     A repeated `launch_velocity` call of the same options on a stack of the same structure reuses such a
     compiled solve by itself (`_LAUNCHES`), for ~20 us more (it looks its options up); a prepared
     function fixes them once and names the structure it was prepared for in its error. Values equal
-    `launch_velocity`'s with the same options. For derivatives use `launch_velocity` (this path has no
-    reverse-mode replay).
+    `launch_velocity`'s with the same options. For derivatives use `launch_velocity`: `jax.grad` through
+    this callable runs, through diffrax's own loop, without the replayed reverse mode's handling of
+    contact onsets (docs/solver-defaults.md: off by up to order 1 with gaps for damped laws).
 
     **Arguments:** as `launch_velocity`; `stack`, `state` fix the structure (and are a valid first call).
 
