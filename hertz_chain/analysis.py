@@ -360,7 +360,12 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     clamped = stack.clamped()
     closed = np.where(clamped, st.forces > 0, st.overlaps > 0)
     every = contact_episodes(st.t, st.overlaps, st.overlap_rates, st.forces, accelerations=dd_acc,
-                             interfaces=interfaces, free_at_end=sol.status.ok, noise_floor=floor,
+                             # free at the end only where the run stopped at the cascade's end (`until="cascade"`);
+                             # a run to t_max (a held or resting chain) or to the top's launch may end with
+                             # contacts loaded, which end there (a review: a resting contact's 1e-9 m/s drift was
+                             # extrapolated to an end at 43,378 s)
+                             interfaces=interfaces, noise_floor=floor,
+                             free_at_end=sol.status.ok and not stack.held and sol.t_final == sol.cascade_end_time,
                              closed=closed, separation=_separation(stack, st.max_overlaps))
     # an episode that starts after its interface's last contact of the first cascade is a rebound
     last_end = np.asarray(sol.contact_end_times, dtype=float)
@@ -400,6 +405,7 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     top_srs = _top_srs(st.t[keep], a_contact[keep, -1] / G0, v_contact[keep, -1] / G0, episodes, top_if,
                        srs_options)
     ind = independence(episodes, interfaces)
+    wall_peak = _wall_peak(stack, st)
     rigid = _rigid_comparison(sol, e_meas, nominal_restitution, v_ref)
     regime = "independent" if ind < INDEPENDENT_BELOW else "overlapping"
     peak_t, peak_v = _peak_velocities(st, sol.cascade_end_time)
@@ -434,12 +440,12 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
         cascade_end_time=float(sol.cascade_end_time),
         rebounds=tuple(rebounds),
         warnings=tuple(_warnings(sol, e_meas, nominal_restitution, regime, tolerances)
-                       + _yield_warnings(stack, strongest, yield_limits)),
+                       + _yield_warnings(stack, strongest, yield_limits, wall_peak)),
         solution=sol,
         peak_velocities=peak_v,
         peak_velocity_times=peak_t,
         wave_speed=speed,
-        wall_peak_force=_wall_peak(stack, st),
+        wall_peak_force=wall_peak,
     )
 
 
@@ -453,22 +459,30 @@ def _wall_peak(stack, st) -> float:
     return max(parabolic_peak(t, f, 0, len(t) - 1)[1], float(f.max()))
 
 
-def _yield_warnings(stack, strongest: dict, yield_limits) -> list[str]:
+def _yield_warnings(stack, strongest: dict, yield_limits, wall_peak: float = float("nan")) -> list[str]:
     """One line per interface whose law cannot yield (no memory) but whose peak Hertz pressure exceeds
-    the yield pressure of its softer body (`materials.YieldLimit`)."""
+    the yield pressure of its softer body (`materials.YieldLimit`); the far wall's contact (elastic Hertz,
+    `YieldLimit.interface` -1) by its peak force `wall_peak`."""
     out = []
     for lim in yield_limits:
-        ep = strongest.get(lim.interface)
-        if ep is None or type(stack.law_of(lim.interface)).has_memory:
-            continue
-        f = ep.peak_force_refined if np.isfinite(ep.peak_force_refined) else ep.peak_force
+        if lim.interface < 0:  # the far wall
+            f, label = wall_peak, "top-wall"
+            if not np.isfinite(f):
+                continue
+        else:
+            ep = strongest.get(lim.interface)
+            if ep is None or type(stack.law_of(lim.interface)).has_memory:
+                continue
+            f = ep.peak_force_refined if np.isfinite(ep.peak_force_refined) else ep.peak_force
+            label = "ground-1" if lim.interface == 0 else f"{lim.interface}-{lim.interface + 1}"
         p0 = float(lim.peak_pressure(f))
         if p0 > lim.yield_pressure:
-            label = "ground-1" if lim.interface == 0 else f"{lim.interface}-{lim.interface + 1}"
+            fix = ("the wall's contact is elastic Hertz, an upper bound on its force" if lim.interface < 0 else
+                   "so this elastic/viscous law over-predicts forces and rebound (an upper bound); law = \"thornton\" "
+                   "models the plasticity")
             out.append(f"interface {label}: peak Hertz pressure {p0 / 1e9:.3g} GPa exceeds the yield pressure "
-                       f"{lim.yield_pressure / 1e9:.3g} GPa (1.6 Y) of {lim.material} by {p0 / lim.yield_pressure:.2g}x:"
-                       " the metal yields, so this elastic/viscous law over-predicts forces and rebound (an upper "
-                       "bound); law = \"thornton\" models the plasticity")
+                       f"{lim.yield_pressure / 1e9:.3g} GPa (1.6 Y) of {lim.material} by {p0 / lim.yield_pressure:.3g}x: "
+                       f"the metal yields, {fix}")
     return out
 
 

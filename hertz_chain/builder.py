@@ -89,6 +89,27 @@ def _with_wall(spec: StackSpec, stack: Stack, state: State, laws, interfaces) ->
                  wall_stiffness=k_w, wall_position=x_w)
 
 
+#: `YieldLimit.interface` of the far wall's contact with the top mass (`[wall]`), which is no interface
+WALL_INTERFACE = -1
+
+
+def _wall_yield_limit(spec: StackSpec, n: int) -> YieldLimit | None:
+    """The far wall's contact with the top mass (a flat wall on the top's radius): its `YieldLimit` where
+    the wall or the top mass has a yield strength, as `_yield_limits` for the interfaces (a review: a
+    steel wall at 2.5x its yield pressure was never warned about)."""
+    w, bodies = spec.wall, spec.stack
+    mats, radii = bodies.material_list(n), bodies.radius_list(n)
+    if w.material is None or mats is None or radii is None or math.isinf(radii[-1]):
+        return None
+    pair = (_material(spec, mats[-1]), _material(spec, w.material))
+    yielding = [mat for mat in pair if mat is not None and mat.yield_pressure is not None]
+    if not yielding:
+        return None
+    soft = min(yielding, key=lambda mat: mat.yield_pressure)
+    return YieldLimit(WALL_INTERFACE, effective_modulus(*pair), effective_radius(radii[-1], None),
+                      soft.yield_pressure, soft.name, soft.yield_strength, soft.poisson_ratio)
+
+
 def _yield_limits(spec: StackSpec, n: int, interfaces) -> dict[int, YieldLimit]:
     """`YieldLimit` of every interface whose two bodies have materials and radii (a rigid ground counts
     as a body that does not yield) and one of which has a yield strength."""
@@ -308,6 +329,9 @@ def _build(spec: StackSpec) -> BuiltStack:
         state = at_impact(stack, spec.drop.impact_velocity, np.asarray(bodies.gap_list(n), dtype=float))
     if spec.wall is not None:
         stack = _with_wall(spec, stack, state, laws, interfaces)
+        wall_limit = _wall_yield_limit(spec, n)
+        if wall_limit is not None:
+            limits[WALL_INTERFACE] = wall_limit
     s = spec.solver
     tol = {k: v for k, v in (("rtol", s.rtol), ("atol", s.atol)) if v is not None}
     if s.onset_window is not None:

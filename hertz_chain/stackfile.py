@@ -14,6 +14,7 @@ Conventions (`notes/CONVENTIONS.md`): masses bottom first; interface 0 is ground
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 import re
 from pathlib import Path
@@ -187,6 +188,9 @@ def _build(data: Mapping) -> StackSpec:
         if ground is None:
             raise _error("stack.end_force", f"{bodies.end_force:g} N needs drop.ground = true (a wall at mass 1 "
                          "that holds the chain against it)")
+    if bodies.preload and ground is None:  # a review: ran, the unsupported chain flying apart in free fall
+        raise _error("stack.preload", "true needs drop.ground = true: a static preload is the chain's weight "
+                     "(and end force) held by the ground, and a chain without it has no static equilibrium")
 
     # --- interface numbers against the number of masses
     if n is not None:
@@ -236,6 +240,20 @@ def _build(data: Mapping) -> StackSpec:
         _check(need <= MAX_RUN_MEMORY, "solver.max_steps", solver.max_steps,
                f"a run of {n} masses would keep {need / 2**30:.1f} GiB of step history; at most "
                f"{MAX_RUN_MEMORY / 2**30:g} GiB (lower max_steps)")
+    # every material named is in the table or the file's [materials] (a review: an unknown stack.material
+    # read "material = 'unobtanium' is invalid", without its key)
+    from .materials import _key, material_names
+
+    own = {m.name for m in materials}
+    table = {_key(name) for name in material_names()}
+    named = [("stack.material", bodies.material), ("ground.material", ground.material if ground else None),
+             ("wall.material", wall.material if wall is not None else None)]
+    for key, value in named:
+        for name in (value if isinstance(value, tuple) else (value,)):
+            if name is not None and name not in own and _key(name) not in table:
+                close = difflib.get_close_matches(_key(name), sorted(table | own), n=1)
+                raise _error(key, f"{name!r} is unknown; the table's materials ({', '.join(material_names())}) or a "
+                             "[materials.NAME] of the file" + (f"; did you mean {close[0]!r}?" if close else ""))
     drop_spec = DropSpec(gravity, impact_velocity, height)
     srs = _parse_srs(top["srs"]) if "srs" in top else SRSSpec()
     return StackSpec(drop_spec, bodies, contacts, ground, solver, materials, title, srs=srs, wall=wall)

@@ -40,7 +40,10 @@ def run_spec(spec: StackSpec) -> Report:
     sol = simulate(built.stack, built.state, **options)
     if built.n_output or built.dt_output:
         if built.dt_output:
-            ts = np.arange(0.0, sol.t_final, built.dt_output)
+            # every multiple of dt up to t_final, t_final itself where it is one (to round-off: 0.3 ms / 1 us
+            # is 299.99999..., and np.arange dropped the last sample, a review)
+            k = int(np.floor(sol.t_final / built.dt_output * (1.0 + 1e-12)))
+            ts = np.minimum(np.arange(k + 1) * built.dt_output, sol.t_final)
         else:
             ts = np.linspace(0.0, sol.t_final, built.n_output)
         sol = simulate(built.stack, built.state, ts=ts, **dict(options, t_max=sol.t_final))

@@ -128,6 +128,13 @@ def test_end_force_bad_input_is_one_line(tmp_path):
     doc["drop"] = {"ground": False}
     with pytest.raises(StackFileError, match=r"stack\.end_force.*drop\.ground = true"):
         hc.load_stack_file(_file(tmp_path, doc, "b.toml"))
+    # preload without the ground: no static equilibrium (a review: it ran, the chain flying apart)
+    doc = _chain_doc()
+    doc["drop"] = {"ground": False, "gravity": "9.8 m/s^2"}
+    doc["stack"].pop("end_force")
+    doc["stack"]["preload"] = True
+    with pytest.raises(StackFileError, match=r"stack\.preload: true needs drop\.ground = true"):
+        hc.load_stack_file(_file(tmp_path, doc, "p.toml"))
     doc = _chain_doc(f0="-1 N")
     with pytest.raises(StackFileError, match=r"stack\.end_force"):
         hc.load_stack_file(_file(tmp_path, doc, "c.toml"))
@@ -250,7 +257,7 @@ def test_wall_bad_input_is_one_line(tmp_path):
         hc.load_stack_file(_file(tmp_path, doc, "u.toml"))
     doc = dict(base, wall={"material": "unobtainium"})
     doc["stack"] = dict(doc["stack"], material="steel-52100", radius="5 mm")
-    with pytest.raises(StackFileError, match=r"wall\.material: 'unobtainium' is unknown; one of"):
+    with pytest.raises(StackFileError, match=r"wall\.material: 'unobtainium' is unknown; the table's materials \(steel-52100"):
         hc.build(hc.load_stack_file(_file(tmp_path, doc, "m.toml")))
     with pytest.raises(ParameterError, match="wall_position"):
         hc.Stack([1.0], hc.Hertz(1e9), wall_stiffness=1e9)
@@ -283,3 +290,54 @@ def test_a_wall_without_the_ground_is_refused_in_one_line():
     with pytest.raises(hc.ParameterError, match=r"^wall_stiffness = .* a far wall only with the ground"):
         hc.Stack([0.01] * 3, hc.Hertz(1e9), ground=False, wall_stiffness=1e9, wall_position=0.1)
 
+
+
+@pytest.mark.parametrize("extra", [{}, {"end_force": "20 N"}])
+def test_contacts_still_loaded_at_t_max_end_there(tmp_path, extra):
+    """A review: a preloaded stack at rest (and one held by an end force), run to t_max, reported a
+    contact "ending" at 43,378 s (17,594 s), far past the 5 ms run: the end of a contact still closed at
+    the run's end was extrapolated from its round-off drift (1e-9 m/s) as if the contact were flying apart.
+    A run that stops at t_max (or at the top's launch) ends such contacts at t_final."""
+    doc = {"drop": {"impact_velocity": 0}, "stack": {"masses": [8.4, 3.4683, 1.4320], "gaps": 0, "preload": True}
+           | extra, "contact": {"law": "hertz", "stiffness": "1e9 N/m^1.5"},
+           "solver": {"until": "t_max", "t_max": "5 ms"}}
+    p = tmp_path / "s.toml"
+    p.write_text(tomli_w.dumps(doc), encoding="utf-8")
+    r = hc.simulate_file(p)
+    assert r.solution.t_final == pytest.approx(5e-3)
+    assert [ep.end for ep in r.episodes] == [r.solution.t_final] * 3
+
+
+def test_a_far_wall_of_a_real_material_warns_when_it_yields(tmp_path):
+    """A review: a steel-4340 wall struck by a steel-52100 sphere at 2.5x its yield pressure was never
+    warned about (the interfaces were). The warning's pressure is Hertz's peak pressure of the wall's
+    contact at the report's wall peak force, p0 = (6 F E*^2 / (pi^3 R^2))^(1/3) (Johnson 1985, Eq 4.24),
+    E* from the two materials and R the sphere's radius (a flat wall), against 1.6 Y of the 4340."""
+    import re
+
+    from hertz_chain.materials import effective_modulus, material
+
+    p = tmp_path / "w.toml"
+    p.write_text('[drop]\nimpact_velocity = "0.2 m/s"\ngravity = 0\n[stack]\nmasses = ["20 g"]\ngaps = []\n'
+                 'material = "steel-52100"\nradius = "8 mm"\n[contact]\nlaw = "hertz"\n[wall]\n'
+                 'material = "steel-4340"\ngap = "0.1 mm"\n[solver]\nuntil = "t_max"\nt_max = "2 ms"\n')
+    r = hc.simulate_file(p)
+    E = effective_modulus(material("steel-52100"), material("steel-4340"))
+    p0 = (6 * r.wall_peak_force * E**2 / (np.pi**3 * 8e-3**2)) ** (1 / 3)
+    p_y = 1.6 * material("steel-4340").yield_strength
+    (line,) = [w for w in r.warnings if w.startswith("interface top-wall")]
+    got = re.search(r"peak Hertz pressure ([\d.]+) GPa exceeds the yield pressure ([\d.]+) GPa", line)
+    assert float(got[1]) == pytest.approx(p0 / 1e9, rel=5e-3) and float(got[2]) == pytest.approx(p_y / 1e9, rel=5e-3)
+    assert p0 > 2 * p_y and "steel-4340" in line
+
+
+def test_the_output_grid_reaches_t_max(tmp_path):
+    """A review: `dt_output = "1 us"` to `t_max = "0.3 ms"` wrote 300 samples ending at 0.299 ms (0.3 ms / 1 us
+    is 299.99999... in floating point, and the grid stopped short): 301 samples, 0 to t_max, 1 us apart."""
+    p = tmp_path / "g.toml"
+    p.write_text('[drop]\ngravity = 0\n[stack]\nmasses = ["10 g", "10 g"]\ngaps = 0\nvelocities = [0, "-0.1 m/s"]\n'
+                 'end_force = "1 N"\n[contact]\nlaw = "hertz"\nstiffness = "1e10 N/m^1.5"\n[solver]\nuntil = "t_max"\n'
+                 't_max = "0.3 ms"\ndt_output = "1 us"\n')
+    t = hc.simulate_file(p).solution.grid.t
+    assert len(t) == 301 and t[0] == 0.0 and t[-1] == pytest.approx(3e-4, rel=1e-15)
+    np.testing.assert_allclose(np.diff(t), 1e-6, rtol=1e-9)

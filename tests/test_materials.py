@@ -159,3 +159,18 @@ def test_a_yield_pressure_from_the_materials_that_never_yields_names_where_it_ca
                                              rf"materials, {re.escape(f'{p_y:.4g}')} Pa \(1.6 x steel-52100's yield strength\), is "
                                              r"invalid: below 2 E\*/pi"):
         build(load_stack_file(p))
+
+
+def test_an_unknown_material_names_its_key(tmp_path):
+    """A review: an unknown stack.material read "material = 'unobtanium' is invalid", without its key;
+    now the key, the table's names and a close match, before anything is built."""
+    from hertz_chain.errors import StackFileError
+    from hertz_chain.stackfile import load_stack_file
+
+    p = tmp_path / "s.toml"
+    for key, line, name in (("stack.material", 'material = "{}"\n', "steel-5210"),):
+        p.write_text('[drop]\nimpact_velocity = "1 m/s"\n[stack]\nmasses = [1.0, 0.5]\ngaps = 0\nradius = "1 cm"\n'
+                     + line.format(name) + '[contact]\nlaw = "hertz"\n')
+        with pytest.raises(StackFileError, match=rf"{re.escape(key)}: '{name}' is unknown; the table's materials "
+                                                 r"\(steel-52100.*did you mean 'steel-52100'\?"):
+            load_stack_file(p)

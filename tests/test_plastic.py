@@ -14,6 +14,7 @@ References, all from the paper's equations written out here (not from the code):
 """
 
 import math
+import re
 
 import jax.numpy as jnp
 import numpy as np
@@ -237,7 +238,7 @@ def test_elastic_law_warns_above_the_yield_velocity(tmp_path, factor, warned):
     assert bool(lines) is warned
     if warned:  # p0 / p_y = (F/F_y)^{1/3} = (delta_m/delta_y)^{1/2} = factor^{2/5} (Hertz: delta_m ~ V^{4/5}),
         # 1.32 without gravity; the weight adds ~1 % to p0 here
-        assert "ground-1" in lines[0] and "alloy" in lines[0] and "by 1.3x" in lines[0]
+        assert "ground-1" in lines[0] and "alloy" in lines[0] and re.search(r"by 1\.3\dx", lines[0])
 
 
 def test_the_table_materials_with_a_yield_strength_give_a_yield_pressure():
