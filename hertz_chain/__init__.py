@@ -27,19 +27,24 @@ else:
 # so that `import hertz_chain` and `hertz-chain --help` still do not import JAX.
 class _ConfigureAfterJax:
     """A `sys.meta_path` finder for the top-level `jax` package only: it lets the other finders find it and
-    runs `hertz_chain._config` once its module has executed; it removes itself at the first import."""
+    runs `hertz_chain._config` once its module has executed; it removes itself when JAX has been imported
+    (not at a mere `importlib.util.find_spec("jax")`, whose spec is thrown away: a review)."""
+
+    searching = False
 
     def find_spec(self, name, path=None, target=None):
-        if name != "jax":
+        if name != "jax" or self.searching:
             return None
-        if self in _sys.meta_path:
-            _sys.meta_path.remove(self)
         import importlib.util
 
-        spec = importlib.util.find_spec("jax")
+        self.searching = True  # the other finders' spec, not this one's again
+        try:
+            spec = importlib.util.find_spec("jax")
+        finally:
+            self.searching = False
         if spec is None or spec.loader is None or not hasattr(spec.loader, "exec_module"):
             return spec
-        loader = spec.loader
+        loader, finder = spec.loader, self
 
         class _Loader:
             def create_module(self, spec):
@@ -47,6 +52,8 @@ class _ConfigureAfterJax:
 
             def exec_module(self, module):
                 loader.exec_module(module)
+                if finder in _sys.meta_path:
+                    _sys.meta_path.remove(finder)
                 try:
                     _importlib.import_module("hertz_chain._config")
                 except Exception:  # pragma: no cover  (never break the user's `import jax`)

@@ -88,7 +88,11 @@ def enable_compilation_cache(path: str | None = None) -> str | None:
     """Turn on JAX's persistent compilation cache in `path`, default ``cache_dir("jax")``
     (``~/.cache/hertz_chain/jax``, or ``$HERTZ_CHAIN_CACHE_DIR/jax``; `hertz_chain._cache`).
 
-    Set ``HERTZ_CHAIN_NO_CACHE=1`` to disable it. Returns the folder used, or None.
+    Set ``HERTZ_CHAIN_NO_CACHE=1`` to disable it. A JAX cache folder the user chose
+    (``JAX_COMPILATION_CACHE_DIR``, or ``jax_compilation_cache_dir`` set before) is kept, with the user's
+    other cache settings; hertz_chain's own traced solves (`_export`) still go below `path` (a review:
+    since `import hertz_chain` sets this up as soon as JAX is imported, it overrode the user's folder).
+    Returns the folder used, or None.
     """
     if os.environ.get("HERTZ_CHAIN_NO_CACHE"):
         return None
@@ -99,9 +103,10 @@ def enable_compilation_cache(path: str | None = None) -> str | None:
         os.makedirs(path, exist_ok=True)
     except OSError:
         return None
-    jax.config.update("jax_compilation_cache_dir", path)
-    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
-    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+    if not (os.environ.get("JAX_COMPILATION_CACHE_DIR") or jax.config.jax_compilation_cache_dir):
+        jax.config.update("jax_compilation_cache_dir", path)
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+        jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
     global CACHE_DIR
     CACHE_DIR = path
     return path

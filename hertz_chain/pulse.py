@@ -249,7 +249,8 @@ def pulse_metrics(
       trapezoid rule, so they are exact at the samples (only the lobe ends, where `a ≈ 0`, are
       interpolated). The peak is then refined between the samples (the slope of the velocity's cubic
       Hermite interpolant).
-    - `smooth`: optional booleans, one per step between samples (`(len(t) - 1,)`): whether the
+    - `smooth`: optional booleans (with `velocity`, which the refinement needs), one per step between
+      samples (`(len(t) - 1,)`): whether the
       acceleration is smooth across it (no contact of the mass opens or closes inside it); the peak is
       refined only on smooth steps (across a contact's kink the interpolant overshoots: a middle mass
       pushed by a dashpot contact read +9.8 %, a review).

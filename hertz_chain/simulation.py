@@ -406,6 +406,11 @@ def _invalid_designs(stacks: Stack, states: State) -> np.ndarray | None:
 
     g = np.asarray(stacks.gravity, dtype=float)
     bad |= ~per_design(np.isfinite(g) & (g >= 0))  # a review: gravity -9.8 in a batch ran "complete"
+    f0 = np.asarray(stacks.end_force, dtype=float)
+    bad |= ~per_design(np.isfinite(f0) & (f0 >= 0))  # a negative end force ran "complete" (a review)
+    if stacks.wall:  # a wall stiffness <= 0 ran without a wall, or to max_steps (a review)
+        kw = np.asarray(stacks.wall_stiffness, dtype=float)
+        bad |= ~per_design(np.isfinite(kw) & (kw > 0))
     for law in stacks.laws:  # a review: a negative stiffness in a batch came back "complete" with NaN
         for field, (lowest, strict, _) in law.field_rules.items():
             a = np.asarray(getattr(law, field), dtype=float)
@@ -637,9 +642,13 @@ def _checked(v, status, replay=False, design=None):
 def _design_invalid(stack, state):
     """Under a trace: whether the design's numbers break a rule that `Stack`, `State` and the laws' own
     checks (`AbstractContactLaw.field_rules`) enforce on concrete values: masses finite and > 0, gravity
-    finite and >= 0, each law parameter within its rule, a finite initial state (a traced bool)."""
+    and the end force finite and >= 0, a wall's stiffness > 0, each law parameter within its rule, a
+    finite initial state (a traced bool)."""
     bad = ~jnp.all(jnp.isfinite(stack.masses) & (stack.masses > 0))
     bad |= ~(jnp.isfinite(stack.gravity) & (stack.gravity >= 0))
+    bad |= ~(jnp.isfinite(stack.end_force) & (stack.end_force >= 0))
+    if stack.wall:
+        bad |= ~(jnp.isfinite(stack.wall_stiffness) & (stack.wall_stiffness > 0))
     for law in stack.laws:
         for field, (lowest, strict, _) in law.field_rules.items():
             a = jnp.asarray(getattr(law, field))

@@ -90,8 +90,20 @@ def test_the_cores_and_inline_dispatch_hold_when_the_first_array_is_the_users(co
     flag = "int(jax.config.values['jax_cpu_enable_async_dispatch'])"
     probe = code + f"; import jax; jnp.zeros(1); print(jax.local_device_count() * 10 + {flag})"
     assert _devices_in_subprocess({"HERTZ_CHAIN_CPU_DEVICES": "3"}, probe) == 30
+    # a mere `importlib.util.find_spec("jax")` first (an "is it installed?" check) keeps the hook (a review)
+    probe = ("import hertz_chain, importlib.util; importlib.util.find_spec('jax'); import jax; jax.numpy.zeros(1); "
+             f"print(jax.local_device_count() * 10 + {flag})")
+    assert _devices_in_subprocess({"HERTZ_CHAIN_CPU_DEVICES": "3"}, probe) == 30
     # and `import hertz_chain` alone still does not import JAX (the command line's start-up)
     assert _devices_in_subprocess({}, "import sys, hertz_chain; print(int('jax' in sys.modules))") == 0
+
+
+def test_a_jax_cache_folder_the_user_chose_is_kept():
+    """A review: since `import hertz_chain` sets the compilation cache up as soon as JAX is imported, it
+    overrode the user's own `JAX_COMPILATION_CACHE_DIR`; kept now (hertz_chain's traced solves stay in its
+    own folder)."""
+    code = "import hertz_chain, jax; print(int(jax.config.jax_compilation_cache_dir == '/tmp/user-jax-cache'))"
+    assert _devices_in_subprocess({"JAX_COMPILATION_CACHE_DIR": "/tmp/user-jax-cache"}, code) == 1
 
 
 def test_a_renamed_name_fails_with_its_new_name():
