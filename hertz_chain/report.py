@@ -255,8 +255,10 @@ def summary_table(report: Report, title: str | None = None) -> str:
     top = r.top_pulse
     if top is not None:
         lines.append(f"top pulse: peak {top.peak_g:,.0f} g at {top.time_of_peak * 1e3:.4g} ms, "
-                     f"duration (10%) {top.duration_10 * 1e3:.4g} ms, rise {top.rise_time * 1e3:.3g} ms, "
-                     f"ΔV {top.delta_v_main:.4g} m/s, equivalent half-sine {top.equivalent_half_sine_duration * 1e3:.4g} ms, "
+                     f"duration (10%) {top.duration_10 * 1e3:.4g} ms, "
+                     + ("rise not measured (no rising edge in the record), " if not np.isfinite(top.rise_time) else
+                        f"rise {top.rise_time * 1e3:.3g} ms, ")
+                     + f"ΔV {top.delta_v_main:.4g} m/s, equivalent half-sine {top.equivalent_half_sine_duration * 1e3:.4g} ms, "
                      f"{top.n_pulses} pulse(s)")
     if r.top_srs is not None:
         s_ = r.top_srs
