@@ -67,7 +67,8 @@ class Solution:
     - `steps`: `Trajectory` at the solver's steps (including t = 0; None for a design of
       `simulate_batch(..., save_steps=False)`); `grid`: `Trajectory` on the
       requested `ts` (NaN after `t_final`), or None.
-    - `scales`: the `Scales` used; `stack`, `state`: the design and the initial state.
+    - `scales`: the `Scales` used; `stack`, `state`: the design and the initial state; `until`: what the
+      run was to end at (`"cascade"`, `"t_max"`, `"launch"`).
     """
 
     status: Status
@@ -87,6 +88,7 @@ class Solution:
     scales: Scales
     stack: Stack
     state: State
+    until: str = "cascade"  # what the run was to end at (`simulate(..., until=...)`)
 
     @property
     def ok(self) -> bool:
@@ -143,6 +145,7 @@ class BatchSolution:
     first_contacts: np.ndarray | None = None
     top_duration_10: np.ndarray | None = None
     top_rise_time: np.ndarray | None = None
+    until: str = "cascade"  # what the runs were to end at (`simulate_batch(..., until=...)`)
 
     @property
     def ok(self) -> np.ndarray:
@@ -162,14 +165,14 @@ class BatchSolution:
                 steps=None if self.steps is None else pick(self.steps),
                 grid=None if self.grid is None else pick(self.grid),
                 scales=pick(self.scales)),
-            pick(self.stack), pick(self.state))
+            pick(self.stack), pick(self.state), self.until)
 
 
 _SCALAR_KEYS = ("status_code", "t_final", "cascade_end_time", "launch_velocities", "launch_times", "final_velocities",
                 "contact_end_times", "num_steps", "num_accepted_steps", "num_rejected_steps", "energy_error")
 
 
-def _to_solution(out: dict, stack, state) -> Solution:
+def _to_solution(out: dict, stack, state, until: str = "cascade") -> Solution:
     code = int(out["status_code"])
     return Solution(
         status=Status(code), status_code=code, t_final=float(out["t_final"]),
@@ -182,5 +185,5 @@ def _to_solution(out: dict, stack, state) -> Solution:
         num_rejected_steps=int(out["num_rejected_steps"]), energy_error=float(out["energy_error"]),
         steps=None if out.get("steps") is None else Trajectory._from(out["steps"], trim=True),
         grid=None if out.get("grid") is None else Trajectory._from(out["grid"], trim=False),
-        scales=out["scales"], stack=stack, state=state,
+        scales=out["scales"], stack=stack, state=state, until=until,
     )

@@ -612,13 +612,14 @@ def _parse_solver(raw: Any) -> SolverSpec:
     if "dt_output" in t:
         dt_output = _positive(t["dt_output"], "solver.dt_output", "time")
         if t_max is not None:
-            _check(t_max / dt_output <= MAX_OUTPUT_POINTS, "solver.dt_output", t["dt_output"],
-                   f"t_max / dt_output = {t_max / dt_output:.4g} output points; at most "
+            points = math.floor(t_max / dt_output * (1.0 + 1e-12)) + 1  # 0, dt, ..., t_max (`workflow`)
+            _check(points <= MAX_OUTPUT_POINTS, "solver.dt_output", t["dt_output"],
+                   f"{points:_} output points (t_max / dt_output + 1); at most "
                    f"{MAX_OUTPUT_POINTS:_} (raise dt_output or lower t_max)")
         else:
             _check(dt_output >= MIN_DT_OUTPUT, "solver.dt_output", t["dt_output"],
                    f"must be >= {MIN_DT_OUTPUT:g} s when solver.t_max is not given (with t_max, "
-                   f"t_max / dt_output <= {MAX_OUTPUT_POINTS:_})")
+                   f"t_max / dt_output + 1 <= {MAX_OUTPUT_POINTS:_})")
     until = _choice(t["until"], "solver.until", UNTIL) if "until" in t else "cascade"
     if until == "t_max" and t_max is None:
         raise _error("solver.until", "'t_max' needs solver.t_max (the time to run to)")

@@ -362,10 +362,12 @@ def analyse(solution, *, nominal_restitution=None, tolerances: dict | None = Non
     every = contact_episodes(st.t, st.overlaps, st.overlap_rates, st.forces, accelerations=dd_acc,
                              # free at the end only where the run stopped at the cascade's end (`until="cascade"`);
                              # a run to t_max (a held or resting chain) or to the top's launch may end with
-                             # contacts loaded, which end there (a review: a resting contact's 1e-9 m/s drift was
-                             # extrapolated to an end at 43,378 s)
+                             # contacts loaded, which end there (reviews: a resting contact's 1e-9 m/s drift was
+                             # extrapolated to an end at 43,378 s; a launch run's loaded contacts "ended" later,
+                             # complete, with made-up separation speeds)
                              interfaces=interfaces, noise_floor=floor,
-                             free_at_end=sol.status.ok and not stack.held and sol.t_final == sol.cascade_end_time,
+                             free_at_end=(sol.status.ok and not stack.held and sol.until == "cascade"
+                                          and sol.t_final == sol.cascade_end_time),
                              closed=closed, separation=_separation(stack, st.max_overlaps))
     # an episode that starts after its interface's last contact of the first cascade is a rebound
     last_end = np.asarray(sol.contact_end_times, dtype=float)
@@ -477,12 +479,12 @@ def _yield_warnings(stack, strongest: dict, yield_limits, wall_peak: float = flo
             label = "ground-1" if lim.interface == 0 else f"{lim.interface}-{lim.interface + 1}"
         p0 = float(lim.peak_pressure(f))
         if p0 > lim.yield_pressure:
-            fix = ("the wall's contact is elastic Hertz, an upper bound on its force" if lim.interface < 0 else
-                   "so this elastic/viscous law over-predicts forces and rebound (an upper bound); law = \"thornton\" "
-                   "models the plasticity")
+            fix = ("the wall's elastic Hertz contact over-predicts its force (an upper bound)" if lim.interface < 0
+                   else "this elastic/viscous law over-predicts forces and rebound (an upper bound); law = "
+                   "\"thornton\" models the plasticity")
             out.append(f"interface {label}: peak Hertz pressure {p0 / 1e9:.3g} GPa exceeds the yield pressure "
                        f"{lim.yield_pressure / 1e9:.3g} GPa (1.6 Y) of {lim.material} by {p0 / lim.yield_pressure:.3g}x: "
-                       f"the metal yields, {fix}")
+                       f"the metal yields, so {fix}")
     return out
 
 

@@ -293,7 +293,7 @@ def simulate(
                              "default from the physics; give t_max to go further)") from None
     out["scales"] = Scales(**out["scales"])
     out = _post_history(out, stack, batched=False)
-    sol = _to_solution(out | {"status_code": out["status"]}, stack, state)
+    sol = _to_solution(out | {"status_code": out["status"]}, stack, state, until)
     if throw and sol.status in (Status.INCOMPLETE_MAX_STEPS, Status.FAILED):
         raise SolverError(f"{sol.status} at t = {sol.t_final:.6g} s after {sol.num_steps} steps for the design "
                           f"({_describe(stack)}); hint: {sol.status.hint(max_steps).replace('solver.', '')}")  # Python's words
@@ -573,6 +573,7 @@ def simulate_batch(
         first_contacts=np_(out["first_contacts"]) if "first_contacts" in out else None,
         top_duration_10=np_(out["top_duration_10"]) if "top_duration_10" in out else None,
         top_rise_time=np_(out["top_rise_time"]) if "top_rise_time" in out else None,
+        until=until,
     )
 
 

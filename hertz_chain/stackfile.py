@@ -240,14 +240,19 @@ def _build(data: Mapping) -> StackSpec:
         _check(need <= MAX_RUN_MEMORY, "solver.max_steps", solver.max_steps,
                f"a run of {n} masses would keep {need / 2**30:.1f} GiB of step history; at most "
                f"{MAX_RUN_MEMORY / 2**30:g} GiB (lower max_steps)")
-    # every material named is in the table or the file's [materials] (a review: an unknown stack.material
-    # read "material = 'unobtanium' is invalid", without its key)
+    # every material that is used (a stiffness computed from it, or caps with a radius: the yield limits) is
+    # in the table or the file's [materials] (a review: an unknown stack.material read "material =
+    # 'unobtanium' is invalid", without its key); with every stiffness given and no radius a name is a
+    # label only, as before (a second review)
     from .materials import _key, material_names
 
     own = {m.name for m in materials}
     table = {_key(name) for name in material_names()}
-    named = [("stack.material", bodies.material), ("ground.material", ground.material if ground else None),
-             ("wall.material", wall.material if wall is not None else None)]
+    used = bodies.shape is not None or any(spec.stiffness is None for spec, _ in sections)
+    wall_used = wall is not None and (wall.stiffness is None or bodies.shape is not None)
+    named = [("stack.material", bodies.material if used else None),
+             ("ground.material", ground.material if ground and used else None),
+             ("wall.material", wall.material if wall_used else None)]
     for key, value in named:
         for name in (value if isinstance(value, tuple) else (value,)):
             if name is not None and name not in own and _key(name) not in table:

@@ -298,3 +298,24 @@ def test_a_middle_mass_pulse_is_not_refined_across_a_contact_kink(tmp_path):
     F = forces(sol.sol(np.linspace(0, 1.5e-3, 300001)))
     ref = float(np.max((F[1] - F[2]) / m[1])) / 9.80665
     assert r.pulses[1].peak_g == pytest.approx(ref, rel=1e-5)
+
+
+def test_contacts_loaded_at_a_launch_runs_end_end_there(tmp_path):
+    """A review: a run to the top's launch (`until = "launch"`) stops with lower contacts still loaded; their
+    ends were extrapolated past the run and marked complete, with made-up separation speeds (an eight-bead
+    Tsuji chain: interfaces 4 and 5 "ended" at 2.63 ms with 0.003 and 0.025 m/s, where the same chain run
+    to its cascade's end has them end at 2.54 and 2.59 ms). They end at t_final now, not complete; the
+    same chain run to its cascade's end still ends them later, complete."""
+    doc = ('[drop]\nground = false\ngravity = 0\n[stack]\nmasses = [1, 1, 1, 1, 1, 1, 1, 1]\ngaps = 0\n'
+           'velocities = ["1 m/s", 0, 0, 0, 0, 0, 0, 0]\n[contact]\nlaw = "tsuji"\nstiffness = "1e9 N/m^1.5"\n'
+           'restitution = 0.9\n[solver]\nuntil = "{}"\n')
+    p = tmp_path / "c.toml"
+    p.write_text(doc.format("launch"))
+    r = hc.simulate_file(p)
+    t_end = r.solution.t_final
+    assert r.solution.until == "launch" and all(ep.end <= t_end for ep in r.episodes)
+    loaded = [ep.interface for ep in r.episodes if not ep.complete]
+    assert loaded and all(ep.end == t_end for ep in r.episodes if ep.interface in loaded)
+    p.write_text(doc.format("cascade"))
+    full = {ep.interface: ep for ep in hc.simulate_file(p).episodes}
+    assert all(full[j].complete and full[j].end > t_end for j in loaded)

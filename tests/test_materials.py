@@ -174,3 +174,7 @@ def test_an_unknown_material_names_its_key(tmp_path):
         with pytest.raises(StackFileError, match=rf"{re.escape(key)}: '{name}' is unknown; the table's materials "
                                                  r"\(steel-52100.*did you mean 'steel-52100'\?"):
             load_stack_file(p)
+    # a name not used (every stiffness given, no radius) is a label, as before (a second review)
+    p.write_text('[drop]\nimpact_velocity = "1 m/s"\n[stack]\nmasses = [1.0, 0.5]\ngaps = 0\nmaterial = "rubber"\n'
+                 '[contact]\nlaw = "hertz"\nstiffness = "1e9 N/m^1.5"\n')
+    assert load_stack_file(p).stack.material == "rubber"
