@@ -93,21 +93,29 @@ def _with_wall(spec: StackSpec, stack: Stack, state: State, laws, interfaces) ->
 WALL_INTERFACE = -1
 
 
-def _wall_yield_limit(spec: StackSpec, n: int) -> YieldLimit | None:
-    """The far wall's contact with the top mass (a flat wall on the top's radius): its `YieldLimit` where
-    the wall or the top mass has a yield strength, as `_yield_limits` for the interfaces (a review: a
-    steel wall at 2.5x its yield pressure was never warned about)."""
-    w, bodies = spec.wall, spec.stack
-    mats, radii = bodies.material_list(n), bodies.radius_list(n)
-    if w.material is None or mats is None or radii is None or math.isinf(radii[-1]):
+def _pair_limit(j: int, pair, r) -> YieldLimit | None:
+    """The `YieldLimit` of contact `j` between the bodies `pair` (materials, None: rigid) with the cap radii
+    `r` (inf: flat), where one of them has a yield strength and one cap is curved; else None."""
+    if math.isinf(r[0]) and math.isinf(r[1]):
         return None
-    pair = (_material(spec, mats[-1]), _material(spec, w.material))
     yielding = [mat for mat in pair if mat is not None and mat.yield_pressure is not None]
     if not yielding:
         return None
     soft = min(yielding, key=lambda mat: mat.yield_pressure)
-    return YieldLimit(WALL_INTERFACE, effective_modulus(*pair), effective_radius(radii[-1], None),
+    R1, R2 = (r[1], r[0]) if math.isinf(r[0]) else r
+    return YieldLimit(j, effective_modulus(*pair), effective_radius(R1, None if math.isinf(R2) else R2),
                       soft.yield_pressure, soft.name, soft.yield_strength, soft.poisson_ratio)
+
+
+def _wall_yield_limit(spec: StackSpec, n: int) -> YieldLimit | None:
+    """The far wall's contact with the top mass (a flat wall): its `YieldLimit`, as `_yield_limits` for the
+    interfaces (a review: a steel wall at 2.5x its yield pressure was never warned about)."""
+    w, bodies = spec.wall, spec.stack
+    mats, radii = bodies.material_list(n), bodies.radius_list(n)
+    if w.material is None or mats is None or radii is None:
+        return None
+    return _pair_limit(WALL_INTERFACE, (_material(spec, mats[-1]), _material(spec, w.material)),
+                       (radii[-1], math.inf))
 
 
 def _yield_limits(spec: StackSpec, n: int, interfaces) -> dict[int, YieldLimit]:
@@ -122,15 +130,9 @@ def _yield_limits(spec: StackSpec, n: int, interfaces) -> dict[int, YieldLimit]:
             pair, r = (_material(spec, spec.ground.material), _material(spec, mats[0])), (spec.ground.radius, radii[0])
         else:
             pair, r = (_material(spec, mats[j - 1]), _material(spec, mats[j])), (radii[j - 1], radii[j])
-        if math.isinf(r[0]) and math.isinf(r[1]):
-            continue
-        yielding = [mat for mat in pair if mat is not None and mat.yield_pressure is not None]
-        if not yielding:
-            continue
-        soft = min(yielding, key=lambda mat: mat.yield_pressure)
-        R1, R2 = (r[1], r[0]) if math.isinf(r[0]) else r
-        out[j] = YieldLimit(j, effective_modulus(*pair), effective_radius(R1, None if math.isinf(R2) else R2),
-                            soft.yield_pressure, soft.name, soft.yield_strength, soft.poisson_ratio)
+        limit = _pair_limit(j, pair, r)
+        if limit is not None:
+            out[j] = limit
     return out
 
 
